@@ -1,0 +1,1 @@
+"""Contact models. Each returns a force and its stiffness so both integrators can use it."""

@@ -1,0 +1,56 @@
+"""Infinite plane: penalty normal force with dissipation and Coulomb friction.
+
+Normal: ``N = max(0, k d - c v_n)`` for the penetration ``d = r - (x - p).n`` of a node sphere
+of the rod radius. Friction is a velocity-level stick force, the tangential force that brings
+the node's sliding velocity to zero in one step, accepted while it is at most ``mu_s N``; beyond
+that the node slides with kinetic friction ``mu_k N`` against its sliding velocity. A static load
+below the friction limit therefore holds exactly (no creep), and sliding follows Coulomb's law.
+The contact stiffness for implicit integrators is ``k n n^T`` (``k`` is returned).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+# Sliding speed (m/s) below which the kinetic direction follows the applied load, not velocity.
+_SLIP_EPS = 1e-12
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def plane_contact_node(x0, x1, x2, v0, v1, v2, fo0, fo1, fo2, mass, radius, dt,
+                       p0, p1, p2, n0, n1, n2, stiffness, damping, mu_s, mu_k):
+    """Contact force (N, lab) on one node and the normal stiffness (N/m; 0 if apart).
+
+    ``fo`` is the node's total non-contact force, used to predict sticking.
+    """
+    gap = (x0 - p0) * n0 + (x1 - p1) * n1 + (x2 - p2) * n2 - radius
+    if gap >= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    vn = v0 * n0 + v1 * n1 + v2 * n2
+    fn = -stiffness * gap - damping * vn
+    if fn <= 0.0:
+        return 0.0, 0.0, 0.0, stiffness
+    f0 = fn * n0
+    f1 = fn * n1
+    f2 = fn * n2
+    if mu_s <= 0.0 and mu_k <= 0.0:
+        return f0, f1, f2, stiffness
+    fon = fo0 * n0 + fo1 * n1 + fo2 * n2
+    vt0 = v0 - vn * n0
+    vt1 = v1 - vn * n1
+    vt2 = v2 - vn * n2
+    # Tangential force that cancels the sliding velocity within this step.
+    s0 = -(mass * vt0 / dt + fo0 - fon * n0)
+    s1 = -(mass * vt1 / dt + fo1 - fon * n1)
+    s2 = -(mass * vt2 / dt + fo2 - fon * n2)
+    smag = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    if smag <= mu_s * fn:
+        return f0 + s0, f1 + s1, f2 + s2, stiffness
+    vmag = math.sqrt(vt0 * vt0 + vt1 * vt1 + vt2 * vt2)
+    if vmag > _SLIP_EPS:
+        scale = -mu_k * fn / vmag
+        return f0 + scale * vt0, f1 + scale * vt1, f2 + scale * vt2, stiffness
+    scale = mu_k * fn / smag
+    return f0 + scale * s0, f1 + scale * s1, f2 + scale * s2, stiffness

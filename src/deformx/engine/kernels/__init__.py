@@ -1,0 +1,1 @@
+"""Numba kernels over the packed arrays of a World (hot paths only)."""

@@ -1,0 +1,107 @@
+"""SO(3) helpers shared by the kernels (PyElastica's conventions).
+
+Directors ``Q`` are stored with rows d1, d2, d3, so ``Q`` maps lab vectors to the material frame.
+Small angles use Taylor polynomials accurate to round-off, which avoids most of the cost of
+sin/cos/acos in the hot loops without changing results beyond the last bits.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_SMALL = 0.05  # rad; below it the truncated series are exact to double precision
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def rotate_directors(Q: np.ndarray, e: int, scale: float, w0: float, w1: float, w2: float) -> None:
+    """In place ``Q[e] <- exp(-scale [w]x) Q[e]`` for a material-frame angular velocity ``w``.
+
+    The Rodrigues form of PyElastica's ``_get_rotation_matrix`` (including its 1e-14 guard).
+    """
+    theta = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    inv = 1.0 / (theta + 1e-14)
+    v0 = w0 * inv
+    v1 = w1 * inv
+    v2 = w2 * inv
+    theta *= scale
+    if theta < _SMALL:
+        t2 = theta * theta
+        s = theta * (1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0))))
+        c = 0.5 * t2 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))))
+    else:
+        s = math.sin(theta)
+        c = 1.0 - math.cos(theta)
+    r00 = 1.0 - c * (v1 * v1 + v2 * v2)
+    r11 = 1.0 - c * (v0 * v0 + v2 * v2)
+    r22 = 1.0 - c * (v0 * v0 + v1 * v1)
+    r01 = s * v2 + c * v0 * v1
+    r10 = -s * v2 + c * v0 * v1
+    r02 = -s * v1 + c * v0 * v2
+    r20 = s * v1 + c * v0 * v2
+    r12 = s * v0 + c * v1 * v2
+    r21 = -s * v0 + c * v1 * v2
+    for j in range(3):
+        a = Q[e, 0, j]
+        b = Q[e, 1, j]
+        d = Q[e, 2, j]
+        Q[e, 0, j] = r00 * a + r01 * b + r02 * d
+        Q[e, 1, j] = r10 * a + r11 * b + r12 * d
+        Q[e, 2, j] = r20 * a + r21 * b + r22 * d
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def relative_rotation_vector(Q: np.ndarray, a: int, b: int) -> tuple[float, float, float]:
+    """Rotation vector (rad, material frame) taking frame ``Q[a]`` to frame ``Q[b]``.
+
+    The log map of ``Q[b] Q[a]^T`` with PyElastica's sign convention (``_inv_rotate``).
+    """
+    v0 = (Q[b, 2, 0] * Q[a, 1, 0] + Q[b, 2, 1] * Q[a, 1, 1] + Q[b, 2, 2] * Q[a, 1, 2]) - (
+        Q[b, 1, 0] * Q[a, 2, 0] + Q[b, 1, 1] * Q[a, 2, 1] + Q[b, 1, 2] * Q[a, 2, 2])
+    v1 = (Q[b, 0, 0] * Q[a, 2, 0] + Q[b, 0, 1] * Q[a, 2, 1] + Q[b, 0, 2] * Q[a, 2, 2]) - (
+        Q[b, 2, 0] * Q[a, 0, 0] + Q[b, 2, 1] * Q[a, 0, 1] + Q[b, 2, 2] * Q[a, 0, 2])
+    v2 = (Q[b, 1, 0] * Q[a, 0, 0] + Q[b, 1, 1] * Q[a, 0, 1] + Q[b, 1, 2] * Q[a, 0, 2]) - (
+        Q[b, 0, 0] * Q[a, 1, 0] + Q[b, 0, 1] * Q[a, 1, 1] + Q[b, 0, 2] * Q[a, 1, 2])
+    trace = ((Q[b, 0, 0] * Q[a, 0, 0] + Q[b, 0, 1] * Q[a, 0, 1] + Q[b, 0, 2] * Q[a, 0, 2])
+             + (Q[b, 1, 0] * Q[a, 1, 0] + Q[b, 1, 1] * Q[a, 1, 1] + Q[b, 1, 2] * Q[a, 1, 2])
+             + (Q[b, 2, 0] * Q[a, 2, 0] + Q[b, 2, 1] * Q[a, 2, 1] + Q[b, 2, 2] * Q[a, 2, 2]))
+    # |v| = 2 sin(theta), trace = 1 + 2 cos(theta): theta / sin(theta) without acos when small.
+    s = 0.5 * math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
+    if s < _SMALL and trace > 1.0:
+        s2 = s * s  # asin(s)/s series
+        ratio = 1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * (5.0 / 112.0 + s2 * (
+            35.0 / 1152.0 + s2 * (63.0 / 2816.0 + s2 * (231.0 / 13312.0 + s2 * (143.0 / 10240.0)))))))
+    else:
+        trace = min(trace, 3.0)
+        trace = max(trace, -1.0)
+        theta = math.acos(0.5 * trace - 0.5) + 1e-14
+        ratio = theta / math.sin(theta)
+    mag = -0.5 * ratio
+    return v0 * mag, v1 * mag, v2 * mag
+
+
+@njit(cache=True, error_model="numpy")
+def curvature_from_directors(directors: np.ndarray, rest_voronoi: np.ndarray, closed: bool) -> np.ndarray:
+    """Discrete curvature/twist (1/m) at the Voronoi domains of one rod, material frame."""
+    n = directors.shape[0]
+    nv = rest_voronoi.shape[0]
+    out = np.zeros((nv, 3))
+    for v in range(nv):
+        r0, r1, r2 = relative_rotation_vector(directors, v, (v + 1) % n)
+        out[v, 0] = r0 / rest_voronoi[v]
+        out[v, 1] = r1 / rest_voronoi[v]
+        out[v, 2] = r2 / rest_voronoi[v]
+    return out
+
+
+def axis_angle_matrix(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Lab-frame rotation matrix of ``angle`` rad about unit ``axis`` (active rotation)."""
+    a = np.asarray(axis, dtype=np.float64)
+    n = np.linalg.norm(a)
+    if n == 0.0 or angle == 0.0:
+        return np.eye(3)
+    a = a / n
+    K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
