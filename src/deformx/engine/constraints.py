@@ -37,7 +37,7 @@ class Clamp:
 
     def _changed(self) -> None:
         if self.rod._world is not None:
-            self.rod._world._constraints_dirty = True
+            self.rod._world._dirty = True
 
     @property
     def holds_frame(self) -> bool:

@@ -72,7 +72,7 @@ class Rod:
         self.density = check.positive("density", density, "kg/m^3")
         self.youngs_modulus = check.positive("youngs_modulus", youngs_modulus, "Pa")
         self.shear_modulus = shear_modulus_from(self.youngs_modulus, shear_modulus, poisson_ratio)
-        self.damping = check.non_negative("damping", damping, "1/s")
+        self._damping = check.non_negative("damping", damping, "1/s")
 
         pos = np.array(positions, dtype=np.float64)
         Q = np.array(directors, dtype=np.float64)
@@ -213,6 +213,17 @@ class Rod:
             rod.rest_kappa = curvature_from_directors(Q, rod.rest_voronoi_lengths, rod.closed)
         return rod
 
+    @property
+    def damping(self) -> float:
+        """Uniform damping rate (1/s): velocities decay as exp(-damping t)."""
+        return self._damping
+
+    @damping.setter
+    def damping(self, value: float) -> None:
+        self._damping = check.non_negative("damping", value, "1/s")
+        if self._world is not None:
+            self._world._dirty = True
+
     # ------------------------------------------------------------------ sizes
     @property
     def n_elements(self) -> int:
@@ -276,7 +287,7 @@ class Rod:
         clamp = Clamp(self, node, element)
         self._clamps.append(clamp)
         if self._world is not None:
-            self._world._constraints_dirty = True
+            self._world._dirty = True
         return clamp
 
     def fix_start(self) -> Clamp:

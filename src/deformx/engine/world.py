@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
@@ -17,6 +19,36 @@ if TYPE_CHECKING:
     from .recorder import Recorder
 
 INTEGRATORS = ("verlet",)
+# Element-steps below which one call is too short to be worth handing to threads.
+_MIN_THREADED_WORK = 20_000
+_POOL: ThreadPoolExecutor | None = None
+
+
+def default_threads() -> int:
+    """Worker threads for multi-rod worlds: ``DEFORMX_NUM_THREADS`` or the usable cores."""
+    env = os.environ.get("DEFORMX_NUM_THREADS")
+    if env:
+        return check.integer_at_least("DEFORMX_NUM_THREADS", int(env), 1)
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def _pool(n: int) -> ThreadPoolExecutor:
+    global _POOL
+    if _POOL is None or _POOL._max_workers < n:
+        _POOL = ThreadPoolExecutor(max_workers=n, thread_name_prefix="deformx")
+    return _POOL
+
+
+def _balanced_groups(rod_ne: np.ndarray, n_groups: int) -> list[tuple[int, int]]:
+    """Split rods into at most ``n_groups`` contiguous ranges of similar element count."""
+    n_rods = rod_ne.shape[0]
+    n_groups = max(1, min(n_groups, n_rods))
+    cuts = np.searchsorted(np.cumsum(rod_ne), np.arange(1, n_groups) * rod_ne.sum() / n_groups)
+    bounds = [0, *sorted(set(int(c) + 1 for c in cuts)), n_rods]
+    return [(a, b) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
 _REASONS = {
     verlet.NOT_FINITE: "a position, frame or load became NaN/inf",
     verlet.RUNAWAY_STRETCH: "runaway stretch (element strain beyond max_strain)",
@@ -29,11 +61,13 @@ class World:
 
     ``gravity`` in m/s^2, ``dt`` in s. ``integrator="verlet"`` is PyElastica's position
     Verlet (explicit; needs dt below roughly ``min(dl, 2r) sqrt(rho/E) / 4``).
-    ``max_strain`` is the element strain beyond which the run is declared diverged.
+    ``max_strain`` is the element strain beyond which the run is declared diverged;
+    ``threads`` (default: usable cores) advance groups of rods in parallel.
     """
 
     def __init__(self, gravity: Sequence[float] = (0.0, 0.0, -9.81), dt: float = 1e-4,
-                 integrator: str = "verlet", max_strain: float = 1.0) -> None:
+                 integrator: str = "verlet", max_strain: float = 1.0,
+                 threads: int | None = None) -> None:
         if integrator not in INTEGRATORS:
             if integrator == "stable":
                 raise NotImplementedError(
@@ -43,11 +77,13 @@ class World:
         self.gravity = check.vector3("gravity", gravity)
         self._dt = check.positive("dt", dt, "s")
         self.max_strain = check.positive("max_strain", max_strain)
+        self.threads = default_threads() if threads is None else check.integer_at_least(
+            "threads", threads, 1)
         self.time = 0.0
         self._rods: list[Rod] = []
         self._planes: list[np.ndarray] = []
         self._block: Block | None = None
-        self._constraints_dirty = True
+        self._dirty = True
         self._planes_arr = np.zeros((0, 11))
 
     # ------------------------------------------------------------------ building
@@ -59,6 +95,7 @@ class World:
     @dt.setter
     def dt(self, value: float) -> None:
         self._dt = check.positive("dt", value, "s")
+        self._dirty = True
 
     @property
     def rods(self) -> tuple[Rod, ...]:
@@ -74,7 +111,7 @@ class World:
         rod._index = len(self._rods)
         self._rods.append(rod)
         self._block = Block(self._rods)
-        self._constraints_dirty = True
+        self._dirty = True
         return rod
 
     def add_plane(self, point: Sequence[float] = (0.0, 0.0, 0.0),
@@ -107,6 +144,7 @@ class World:
             raise ValueError(f"kinetic_friction ({mu_k}) must be <= static_friction ({mu_s})")
         self._planes.append(np.array([*p, *n, k, c, mu_s, mu_k, 1.0 if auto else 0.0]))
         self._planes_arr = np.array(self._planes)
+        self._dirty = True
         return len(self._planes) - 1
 
     # ------------------------------------------------------------------ stepping
@@ -132,7 +170,26 @@ class World:
         self._fcon_elem = np.array(fe, dtype=np.int64)
         self._fcon_Q0 = np.array(fq, dtype=np.float64).reshape(-1, 3, 3)
         self._fcon_data = np.array(fd, dtype=np.float64).reshape(-1, 4)
-        self._constraints_dirty = False
+
+    def _prepare(self) -> None:
+        """Rebuild what the kernel needs after rods, clamps, planes, dt or damping changed."""
+        self._sync_constraints()
+        b = self._block
+        n_rods = len(self._rods)
+        decay = np.array([math.exp(-r.damping * self._dt) for r in self._rods])
+        self._status = np.zeros((n_rods, 3), dtype=np.int64)
+        self._times = np.empty(n_rods)
+        self._groups = _balanced_groups(b.rod_ne, self.threads)
+        self._args = (
+            b.rod_node0, b.rod_elem0, b.rod_vor0, b.rod_ne, b.rod_closed, decay,
+            self._rod_pcon, self._rod_fcon,
+            b.pos, b.vel, b.mass, b.node_radius, b.fext, b.force, b.contact_force,
+            b.Q, b.omega, b.J, b.inv_J, b.S, b.rest_len, b.rest_sigma, b.text, b.torque,
+            b.dil, b.stress, b.B, b.rest_vor, b.rest_kappa, b.kappa, b.couple,
+            b.scr_lab, b.scr_C, b.scr_X, b.scr_edot, b.scr_vdil,
+            self._pcon_node, self._pcon_data, self._fcon_elem, self._fcon_Q0, self._fcon_data,
+            self._planes_arr, self._status, self._times)
+        self._dirty = False
 
     def step(self, n_steps: int = 1) -> None:
         """Advance ``n_steps`` time steps (one kernel call for all rods and steps)."""
@@ -142,24 +199,19 @@ class World:
         if self._block is None:
             self.time += n_steps * self._dt
             return
-        if self._constraints_dirty:
-            self._sync_constraints()
-        b = self._block
-        n_rods = len(self._rods)
-        decay = np.array([math.exp(-r.damping * self._dt) for r in self._rods])
-        status = np.zeros((n_rods, 3), dtype=np.int64)
-        times = np.empty(n_rods)
-        # Threads pay off once there are several rods; one rod runs on the serial kernel.
-        advance = verlet.advance_parallel if n_rods > 1 else verlet.advance_serial
-        advance(n_steps, self.time, self._dt, self.gravity, self.max_strain,
-                b.rod_node0, b.rod_elem0, b.rod_vor0, b.rod_ne, b.rod_closed, decay,
-                self._rod_pcon, self._rod_fcon,
-                b.pos, b.vel, b.mass, b.node_radius, b.fext, b.force, b.contact_force,
-                b.Q, b.omega, b.J, b.inv_J, b.S, b.rest_len, b.rest_sigma, b.text, b.torque,
-                b.dil, b.stress, b.B, b.rest_vor, b.rest_kappa, b.kappa, b.couple,
-                b.scr_lab, b.scr_C, b.scr_X, b.scr_edot, b.scr_vdil,
-                self._pcon_node, self._pcon_data, self._fcon_elem, self._fcon_Q0, self._fcon_data,
-                self._planes_arr, status, times)
+        if self._dirty:
+            self._prepare()
+        status, times = self._status, self._times
+        status[:] = 0
+        args = (n_steps, self.time, self._dt, self.gravity, self.max_strain, *self._args)
+        work = n_steps * int(self._block.rod_ne.sum())
+        if len(self._groups) > 1 and work >= _MIN_THREADED_WORK:
+            futures = [_pool(len(self._groups)).submit(verlet.advance_rods, r0, r1, *args)
+                       for r0, r1 in self._groups]
+            for f in futures:
+                f.result()
+        else:
+            verlet.advance_rods(0, len(self._rods), *args)
         failed = np.flatnonzero(status[:, 0] != verlet.OK)
         if failed.size:
             # Report the rod that failed first; the world's state is not usable afterwards.

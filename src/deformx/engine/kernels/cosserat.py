@@ -51,7 +51,7 @@ def rod_internal_loads(
         t2 = dx2 * inv_len
         inv_l0 = 1.0 / rest_len[e]
         d = length * inv_l0
-        inv_d = 1.0 / d
+        inv_d = rest_len[e] * inv_len
         dil[e] = d
         # Tangent in the material frame, kept for the shear-stretch couple below.
         qt0 = Q[e, 0, 0] * t0 + Q[e, 0, 1] * t1 + Q[e, 0, 2] * t2

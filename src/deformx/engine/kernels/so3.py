@@ -19,30 +19,30 @@ _SMALL = 0.05  # rad; below it the truncated series are exact to double precisio
 def rotate_directors(Q: np.ndarray, e: int, scale: float, w0: float, w1: float, w2: float) -> None:
     """In place ``Q[e] <- exp(-scale [w]x) Q[e]`` for a material-frame angular velocity ``w``.
 
-    The Rodrigues form of PyElastica's ``_get_rotation_matrix`` (including its 1e-14 guard).
+    Rodrigues' formula as in PyElastica's ``_get_rotation_matrix``, written in the rotation
+    vector ``phi = scale * w`` so that small angles need no sqrt, division or sin/cos.
     """
-    theta = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
-    inv = 1.0 / (theta + 1e-14)
-    v0 = w0 * inv
-    v1 = w1 * inv
-    v2 = w2 * inv
-    theta *= scale
-    if theta < _SMALL:
-        t2 = theta * theta
-        s = theta * (1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0))))
-        c = 0.5 * t2 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))))
+    p0 = scale * w0
+    p1 = scale * w1
+    p2 = scale * w2
+    t2 = p0 * p0 + p1 * p1 + p2 * p2
+    # R = I - s [phi] + c [phi]^2 with s = sin(t)/t, c = (1 - cos t)/t^2, t = |phi|.
+    if t2 < _SMALL * _SMALL:
+        s = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0)))
+        c = 0.5 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))))
     else:
-        s = math.sin(theta)
-        c = 1.0 - math.cos(theta)
-    r00 = 1.0 - c * (v1 * v1 + v2 * v2)
-    r11 = 1.0 - c * (v0 * v0 + v2 * v2)
-    r22 = 1.0 - c * (v0 * v0 + v1 * v1)
-    r01 = s * v2 + c * v0 * v1
-    r10 = -s * v2 + c * v0 * v1
-    r02 = -s * v1 + c * v0 * v2
-    r20 = s * v1 + c * v0 * v2
-    r12 = s * v0 + c * v1 * v2
-    r21 = -s * v0 + c * v1 * v2
+        theta = math.sqrt(t2)
+        s = math.sin(theta) / theta
+        c = (1.0 - math.cos(theta)) / t2
+    r00 = 1.0 - c * (p1 * p1 + p2 * p2)
+    r11 = 1.0 - c * (p0 * p0 + p2 * p2)
+    r22 = 1.0 - c * (p0 * p0 + p1 * p1)
+    r01 = s * p2 + c * p0 * p1
+    r10 = -s * p2 + c * p0 * p1
+    r02 = -s * p1 + c * p0 * p2
+    r20 = s * p1 + c * p0 * p2
+    r12 = s * p0 + c * p1 * p2
+    r21 = -s * p0 + c * p1 * p2
     for j in range(3):
         a = Q[e, 0, j]
         b = Q[e, 1, j]
@@ -68,9 +68,8 @@ def relative_rotation_vector(Q: np.ndarray, a: int, b: int) -> tuple[float, floa
              + (Q[b, 1, 0] * Q[a, 1, 0] + Q[b, 1, 1] * Q[a, 1, 1] + Q[b, 1, 2] * Q[a, 1, 2])
              + (Q[b, 2, 0] * Q[a, 2, 0] + Q[b, 2, 1] * Q[a, 2, 1] + Q[b, 2, 2] * Q[a, 2, 2]))
     # |v| = 2 sin(theta), trace = 1 + 2 cos(theta): theta / sin(theta) without acos when small.
-    s = 0.5 * math.sqrt(v0 * v0 + v1 * v1 + v2 * v2)
-    if s < _SMALL and trace > 1.0:
-        s2 = s * s  # asin(s)/s series
+    s2 = 0.25 * (v0 * v0 + v1 * v1 + v2 * v2)
+    if s2 < _SMALL * _SMALL and trace > 1.0:  # asin(s)/s series, s = sin(theta)
         ratio = 1.0 + s2 * (1.0 / 6.0 + s2 * (3.0 / 40.0 + s2 * (5.0 / 112.0 + s2 * (
             35.0 / 1152.0 + s2 * (63.0 / 2816.0 + s2 * (231.0 / 13312.0 + s2 * (143.0 / 10240.0)))))))
     else:

@@ -5,12 +5,12 @@ contact, velocity update, clamp rates, uniform damping, half kinematic step, cla
 order is PyElastica's, so trajectories agree to round-off. Inside one call the closing half step
 of a step and the opening half step of the next are fused into one full step (same result to
 round-off, half the rotation work). Rods do not interact yet, so each rod advances all its steps
-independently and rods run in parallel.
+independently; ``advance_rods`` releases the GIL so the World can run groups of rods on threads.
 """
 
 from __future__ import annotations
 
-from numba import njit, prange
+from numba import njit
 
 from ..contact.plane import plane_contact_node
 from .cosserat import rod_internal_loads
@@ -198,34 +198,25 @@ def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, force, dt, cont
             contact_force[i, 2] += f2
 
 
-def _make_driver(parallel: bool):
-    loop = prange if parallel else range
-
-    def advance_all(
-        n_steps, t, dt, gravity, max_strain,
-        rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
-        pos, vel, mass, node_radius, fext, force, contact_force,
-        Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
-        B, rest_vor, rest_kappa, kappa, couple,
-        scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
-        pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-        planes, status, times,
-    ):
-        for r in loop(rod_ne.shape[0]):
-            times[r] = advance_rod(
-                r, n_steps, t, dt, gravity, max_strain,
-                rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
-                pos, vel, mass, node_radius, fext, force, contact_force,
-                Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
-                B, rest_vor, rest_kappa, kappa, couple,
-                scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
-                pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-                planes, status)
-
-    if parallel:
-        return njit(cache=True, parallel=True, error_model="numpy")(advance_all)
-    return njit(cache=True, error_model="numpy")(advance_all)
-
-
-advance_serial = _make_driver(parallel=False)
-advance_parallel = _make_driver(parallel=True)
+@njit(cache=True, nogil=True, error_model="numpy")
+def advance_rods(
+    r_begin, r_end, n_steps, t, dt, gravity, max_strain,
+    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
+    pos, vel, mass, node_radius, fext, force, contact_force,
+    Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
+    B, rest_vor, rest_kappa, kappa, couple,
+    scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+    pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
+    planes, status, times,
+):
+    """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods."""
+    for r in range(r_begin, r_end):
+        times[r] = advance_rod(
+            r, n_steps, t, dt, gravity, max_strain,
+            rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
+            pos, vel, mass, node_radius, fext, force, contact_force,
+            Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
+            B, rest_vor, rest_kappa, kappa, couple,
+            scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+            pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
+            planes, status)
