@@ -42,6 +42,8 @@ from pydantic import (
     model_validator,
 )
 
+from .engine.rod import explicit_time_step
+
 __all__ = [
     "Material",
     "StraightRod",
@@ -297,20 +299,9 @@ def load_scene(path: str | Path) -> Scene:
 def estimate_stable_dt(length: float, n_elements: int, radius: float, density: float,
                        youngs_modulus: float, shear_modulus: float | None = None,
                        safety: float = 0.3) -> float:
-    """A conservative explicit (position-Verlet) time step (s) for one rod.
-
-    The two fastest modes of the discretization bound the step: an axial wave crossing one
-    element, ``dl sqrt(rho / E)``, and the shear-rotation oscillation of one cross-section,
-    ``r / sqrt(k G / rho)`` with the shear coefficient ``k = 4/3`` of a circle. The smaller one
-    times ``safety`` is returned (0.3 reproduces the 1e-4 s PyElastica uses for its 100-element
-    1 m test rod, whose measured limit is about 2e-4 s). A guide, not a guarantee: stiff contacts
-    and large deformations tighten it.
-    """
+    """A conservative explicit time step (s) for a uniform rod (see ``explicit_time_step``)."""
     G = youngs_modulus / 3.0 if shear_modulus is None else shear_modulus
-    dl = length / n_elements
-    t_axial = dl * math.sqrt(density / youngs_modulus)
-    t_shear = radius * math.sqrt(density / (4.0 / 3.0 * G))
-    return safety * min(t_axial, t_shear)
+    return explicit_time_step(length / n_elements, radius, density, youngs_modulus, G, safety)
 
 
 def _material_kwargs(m: Material) -> dict:

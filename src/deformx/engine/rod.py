@@ -7,6 +7,7 @@ adding further rods, which repacks).
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
@@ -32,6 +33,21 @@ def shear_modulus_from(youngs_modulus: float, shear_modulus: float | None,
     nu = DEFAULT_POISSON if poisson_ratio is None else check.in_range(
         "poisson_ratio", poisson_ratio, -1.0, 0.5, low_open=True)
     return youngs_modulus / (2.0 * (1.0 + nu))
+
+
+def explicit_time_step(element_length: float, radius: float, density: float,
+                       youngs_modulus: float, shear_modulus: float, safety: float = 0.3) -> float:
+    """A conservative position-Verlet time step (s) for a rod discretisation.
+
+    The two fastest modes bound the step: an axial wave crossing one element,
+    ``dl sqrt(rho / E)``, and the shear-rotation oscillation of one cross-section,
+    ``r / sqrt(k G / rho)`` with the circle's shear coefficient k = 4/3. ``safety`` = 0.3
+    gives PyElastica's usual 1e-4 s for its 1 m, 100-element test rod (measured limit ~2e-4 s).
+    Stiff contacts and large deformations can tighten it.
+    """
+    t_axial = element_length * math.sqrt(density / youngs_modulus)
+    t_shear = radius * math.sqrt(density / (4.0 / 3.0 * shear_modulus))
+    return safety * min(t_axial, t_shear)
 
 
 def _perpendicular(t: np.ndarray) -> np.ndarray:
@@ -349,10 +365,9 @@ class Rod:
         return -float(np.sum(self.masses * (self._positions @ g)))
 
     def stable_dt(self) -> float:
-        """A conservative explicit time step (s) for this rod alone (wave speed and rotation)."""
-        dl = float(self.rest_lengths.min())
-        modulus = max(self.youngs_modulus, self.shear_modulus)
-        return 0.25 * min(dl, 2.0 * self.radius) * np.sqrt(self.density / modulus)
+        """A conservative explicit (Verlet) time step (s) for this rod alone."""
+        return explicit_time_step(float(self.rest_lengths.min()), self.radius, self.density,
+                                  self.youngs_modulus, self.shear_modulus)
 
     def __repr__(self) -> str:
         kind = "closed" if self.closed else "open"
