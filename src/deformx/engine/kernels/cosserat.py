@@ -39,7 +39,7 @@ def rod_internal_loads(
     # Stretch / shear: element strain, stress, and the lab-frame stress Q^T n / e.
     for k in range(ne):
         a = n0 + k
-        b = n0 + (k + 1) % nn
+        b = a + 1 if k + 1 < nn else n0  # wraps only on a closed rod (no integer modulo)
         e = e0 + k
         dx0 = pos[b, 0] - pos[a, 0]
         dx1 = pos[b, 1] - pos[a, 1]
@@ -82,7 +82,7 @@ def rod_internal_loads(
         force[n0 + k, 2] = 0.0
     for k in range(ne):
         a = n0 + k
-        b = n0 + (k + 1) % nn
+        b = a + 1 if k + 1 < nn else n0
         e = e0 + k
         for i in range(3):
             force[a, i] += scr_lab[e, i]
@@ -91,7 +91,7 @@ def rod_internal_loads(
     # Bend / twist at the Voronoi domains.
     for j in range(nv):
         ea = e0 + j
-        eb = e0 + (j + 1) % ne
+        eb = ea + 1 if j + 1 < ne else e0
         vj = v0 + j
         inv_v0 = 1.0 / rest_vor[vj]
         vd = 0.5 * (rest_len[ea] * dil[ea] + rest_len[eb] * dil[eb]) * inv_v0
@@ -122,7 +122,7 @@ def rod_internal_loads(
         has_right = closed or k < ne - 1
         has_left = closed or k > 0
         jr = v0 + k
-        jl = v0 + (k - 1) % ne
+        jl = jr - 1 if k > 0 else v0 + ne - 1
         for i in range(3):
             c = 0.0
             x = 0.0
