@@ -55,6 +55,15 @@ class Block:
         self.scr_lab = np.zeros((E, 3))
         self.scr_edot = np.zeros(E)
 
+        # Stable integrator: state at the step start, friction anchors, Newton statistics.
+        self.xn = np.zeros((N, 3))
+        self.vn = np.zeros((N, 3))
+        self.Qn = np.tile(np.eye(3), (E, 1, 1))
+        self.wn = np.zeros((E, 3))
+        self.anchor = np.zeros((N, 3))
+        self.anchor_on = np.zeros(N, dtype=np.int64)
+        self.stats = np.zeros((R, 4))
+
         self.B = np.zeros((V, 3))
         self.rest_vor = np.ones(V)
         self.rest_kappa = np.zeros((V, 3))

@@ -96,7 +96,7 @@ def rod_internal_loads(
         inv_v0 = 1.0 / rest_vor[vj]
         vd = 0.5 * (rest_len[ea] * dil[ea] + rest_len[eb] * dil[eb]) * inv_v0
         scr_vdil[vj] = vd
-        r0, r1, r2 = relative_rotation_vector(Q, ea, eb)
+        r0, r1, r2 = relative_rotation_vector(Q, ea, Q, eb)
         inv3 = 1.0 / (vd * vd * vd)
         kappa[vj, 0] = r0 * inv_v0
         kappa[vj, 1] = r1 * inv_v0

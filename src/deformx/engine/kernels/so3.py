@@ -53,20 +53,20 @@ def rotate_directors(Q: np.ndarray, e: int, scale: float, w0: float, w1: float, 
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def relative_rotation_vector(Q: np.ndarray, a: int, b: int) -> tuple[float, float, float]:
-    """Rotation vector (rad, material frame) taking frame ``Q[a]`` to frame ``Q[b]``.
+def relative_rotation_vector(Qa: np.ndarray, a: int, Qb: np.ndarray, b: int) -> tuple[float, float, float]:
+    """Rotation vector phi (rad, material frame) with ``Qb[b] = exp(-[phi]) Qa[a]``.
 
-    The log map of ``Q[b] Q[a]^T`` with PyElastica's sign convention (``_inv_rotate``).
+    The log map of ``Qb[b] Qa[a]^T`` with PyElastica's conventions (``_inv_rotate``).
     """
-    v0 = (Q[b, 2, 0] * Q[a, 1, 0] + Q[b, 2, 1] * Q[a, 1, 1] + Q[b, 2, 2] * Q[a, 1, 2]) - (
-        Q[b, 1, 0] * Q[a, 2, 0] + Q[b, 1, 1] * Q[a, 2, 1] + Q[b, 1, 2] * Q[a, 2, 2])
-    v1 = (Q[b, 0, 0] * Q[a, 2, 0] + Q[b, 0, 1] * Q[a, 2, 1] + Q[b, 0, 2] * Q[a, 2, 2]) - (
-        Q[b, 2, 0] * Q[a, 0, 0] + Q[b, 2, 1] * Q[a, 0, 1] + Q[b, 2, 2] * Q[a, 0, 2])
-    v2 = (Q[b, 1, 0] * Q[a, 0, 0] + Q[b, 1, 1] * Q[a, 0, 1] + Q[b, 1, 2] * Q[a, 0, 2]) - (
-        Q[b, 0, 0] * Q[a, 1, 0] + Q[b, 0, 1] * Q[a, 1, 1] + Q[b, 0, 2] * Q[a, 1, 2])
-    trace = ((Q[b, 0, 0] * Q[a, 0, 0] + Q[b, 0, 1] * Q[a, 0, 1] + Q[b, 0, 2] * Q[a, 0, 2])
-             + (Q[b, 1, 0] * Q[a, 1, 0] + Q[b, 1, 1] * Q[a, 1, 1] + Q[b, 1, 2] * Q[a, 1, 2])
-             + (Q[b, 2, 0] * Q[a, 2, 0] + Q[b, 2, 1] * Q[a, 2, 1] + Q[b, 2, 2] * Q[a, 2, 2]))
+    v0 = (Qb[b, 2, 0] * Qa[a, 1, 0] + Qb[b, 2, 1] * Qa[a, 1, 1] + Qb[b, 2, 2] * Qa[a, 1, 2]) - (
+        Qb[b, 1, 0] * Qa[a, 2, 0] + Qb[b, 1, 1] * Qa[a, 2, 1] + Qb[b, 1, 2] * Qa[a, 2, 2])
+    v1 = (Qb[b, 0, 0] * Qa[a, 2, 0] + Qb[b, 0, 1] * Qa[a, 2, 1] + Qb[b, 0, 2] * Qa[a, 2, 2]) - (
+        Qb[b, 2, 0] * Qa[a, 0, 0] + Qb[b, 2, 1] * Qa[a, 0, 1] + Qb[b, 2, 2] * Qa[a, 0, 2])
+    v2 = (Qb[b, 1, 0] * Qa[a, 0, 0] + Qb[b, 1, 1] * Qa[a, 0, 1] + Qb[b, 1, 2] * Qa[a, 0, 2]) - (
+        Qb[b, 0, 0] * Qa[a, 1, 0] + Qb[b, 0, 1] * Qa[a, 1, 1] + Qb[b, 0, 2] * Qa[a, 1, 2])
+    trace = ((Qb[b, 0, 0] * Qa[a, 0, 0] + Qb[b, 0, 1] * Qa[a, 0, 1] + Qb[b, 0, 2] * Qa[a, 0, 2])
+             + (Qb[b, 1, 0] * Qa[a, 1, 0] + Qb[b, 1, 1] * Qa[a, 1, 1] + Qb[b, 1, 2] * Qa[a, 1, 2])
+             + (Qb[b, 2, 0] * Qa[a, 2, 0] + Qb[b, 2, 1] * Qa[a, 2, 1] + Qb[b, 2, 2] * Qa[a, 2, 2]))
     # |v| = 2 sin(theta), trace = 1 + 2 cos(theta): theta / sin(theta) without acos when small.
     s2 = 0.25 * (v0 * v0 + v1 * v1 + v2 * v2)
     if s2 < _SMALL * _SMALL and trace > 1.0:  # asin(s)/s series, s = sin(theta)
@@ -88,7 +88,7 @@ def curvature_from_directors(directors: np.ndarray, rest_voronoi: np.ndarray, cl
     nv = rest_voronoi.shape[0]
     out = np.zeros((nv, 3))
     for v in range(nv):
-        r0, r1, r2 = relative_rotation_vector(directors, v, (v + 1) % n)
+        r0, r1, r2 = relative_rotation_vector(directors, v, directors, v + 1 if v + 1 < n else 0)
         out[v, 0] = r0 / rest_voronoi[v]
         out[v, 1] = r1 / rest_voronoi[v]
         out[v, 2] = r2 / rest_voronoi[v]

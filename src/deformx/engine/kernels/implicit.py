@@ -1,0 +1,435 @@
+"""Stable large-step integrator: implicit Euler on positions and rotations, Newton, banded solve.
+
+Each step solves the backward-Euler equations of the same discrete Cosserat rod as the explicit
+integrator (same internal force/torque kernel, so the two agree as dt -> 0):
+
+    m (v - v_n) / h + nu m v = F(x, Q, v)                    v = (x - x_n) / h
+    J (w - w_n) / (h e) + nu J w / e = tau(x, Q, w)          Q = exp(-h [w]) Q_n
+
+by Newton iterations on node displacements and element rotation vectors. The Newton matrix is
+the mass/inertia term, the exact Hessian of the stretch-shear energy (quadratic in positions at
+fixed frames) including its stress (geometric) terms, a Gauss-Newton bend-twist Hessian and the
+contact stiffnesses. In the per-rod order x0, phi0, x1, phi1, ... it is block-pentadiagonal and
+factors by banded Cholesky in O(n). Every stiff term is implicit, so the step is stable for any
+stiffness; the numerical damping is backward Euler's: a mode of angular frequency w keeps
+1/sqrt(1 + (w h)^2) of its amplitude per step.
+
+Contact friction is an elastic stick spring anchored where the node touched down: a static load
+below mu_s N holds exactly (bounded elastic shift F/k, no creep), and sliding costs mu_k N.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .banded import band_cholesky, band_solve
+from .cosserat import rod_internal_loads
+from .so3 import relative_rotation_vector, rotate_directors
+from .verlet import OK, _check, _constrain_values
+
+BAND = 8  # scalar half bandwidth: coupled 3x3 blocks are at most two blocks apart
+NOT_CONVERGED = 4  # status code: the Newton matrix was not positive definite
+N_STATS = 4  # per rod: steps, Newton iterations, steps at the iteration cap, last relative update
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _add_block(ab, I, J, M, transpose):
+    """Add the 3x3 block ``M`` (or ``M^T``) at block row ``I``, block column ``J``.
+
+    Blocks above the diagonal are stored as their transposes below it; entries that fall
+    outside the band (the wrap-around coupling of a closed rod) are left out of the matrix,
+    which then is an approximate Newton matrix for that rod.
+    """
+    if I < J:
+        I, J = J, I
+        transpose = not transpose
+    for i in range(3):
+        for j in range(3):
+            row = 3 * I + i
+            col = 3 * J + j
+            if row >= col and row - col <= BAND:
+                ab[row, row - col] += M[j, i] if transpose else M[i, j]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _skew(v0, v1, v2, i, j):
+    """Entry (i, j) of the cross-product matrix [v] (so [v] u = v x u)."""
+    if i == 0:
+        return 0.0 if j == 0 else (-v2 if j == 1 else v1)
+    if i == 1:
+        return v2 if j == 0 else (0.0 if j == 1 else -v0)
+    return -v1 if j == 0 else (v0 if j == 1 else 0.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B, rest_vor,
+              mass, J, nu, ab, M, K):
+    """Newton matrix of one rod into ``ab`` (lower band); returns the number of unknowns."""
+    nb = 2 * ne + (0 if closed else 1)
+    for i in range(3 * nb):
+        for k in range(BAND + 1):
+            ab[i, k] = 0.0
+    for i in range(nn):
+        c = mass[n0 + i] * (1.0 / (h * h) + nu / h)
+        for d in range(3):
+            ab[6 * i + d, 0] += c
+    for k in range(ne):
+        e = e0 + k
+        ia = n0 + k
+        ib = ia + 1 if k + 1 < nn else n0
+        bx = 2 * k
+        bphi = 2 * k + 1
+        by = 2 * k + 2 if k + 1 < nn else 0
+        c = (1.0 / (h * h) + nu / h) / dil[e]
+        for d in range(3):
+            ab[3 * bphi + d, 0] += J[e, d] * c
+        l0 = rest_len[e]
+        # a = Q dx / l0 (stretch times material tangent), n = material stress.
+        dx0 = pos[ib, 0] - pos[ia, 0]
+        dx1 = pos[ib, 1] - pos[ia, 1]
+        dx2 = pos[ib, 2] - pos[ia, 2]
+        a0 = (Q[e, 0, 0] * dx0 + Q[e, 0, 1] * dx1 + Q[e, 0, 2] * dx2) / l0
+        a1 = (Q[e, 1, 0] * dx0 + Q[e, 1, 1] * dx1 + Q[e, 1, 2] * dx2) / l0
+        a2 = (Q[e, 2, 0] * dx0 + Q[e, 2, 1] * dx1 + Q[e, 2, 2] * dx2) / l0
+        n0_, n1_, n2_ = stress[e, 0], stress[e, 1], stress[e, 2]
+        # Node-node: Q^T S Q / l0 (exact: sigma is linear in positions at fixed frames).
+        for i in range(3):
+            for j in range(3):
+                K[i, j] = (Q[e, 0, i] * S[e, 0] * Q[e, 0, j] + Q[e, 1, i] * S[e, 1] * Q[e, 1, j]
+                           + Q[e, 2, i] * S[e, 2] * Q[e, 2, j]) / l0
+        _add_block(ab, bx, bx, K, False)
+        _add_block(ab, by, by, K, False)
+        for i in range(3):
+            for j in range(3):
+                M[i, j] = -K[i, j]
+        _add_block(ab, by, bx, M, False)
+        # Node-rotation: H(x_b, phi) = Q^T (S [a] - [n]); H(x_a, phi) = -H(x_b, phi).
+        for i in range(3):
+            for j in range(3):
+                s = 0.0
+                for m in range(3):
+                    s += Q[e, m, i] * (S[e, m] * _skew(a0, a1, a2, m, j) - _skew(n0_, n1_, n2_, m, j))
+                M[i, j] = s
+                K[i, j] = -s
+        _add_block(ab, by, bphi, M, False)
+        _add_block(ab, bx, bphi, K, False)
+        # Rotation-rotation: l0 ([a]^T S [a] + sym(n a^T) - (n . a) I).
+        na = n0_ * a0 + n1_ * a1 + n2_ * a2
+        for i in range(3):
+            ni = n0_ if i == 0 else (n1_ if i == 1 else n2_)
+            ai = a0 if i == 0 else (a1 if i == 1 else a2)
+            for j in range(3):
+                nj = n0_ if j == 0 else (n1_ if j == 1 else n2_)
+                aj = a0 if j == 0 else (a1 if j == 1 else a2)
+                s = 0.0
+                for m in range(3):
+                    s += _skew(a0, a1, a2, m, i) * S[e, m] * _skew(a0, a1, a2, m, j)
+                K[i, j] = l0 * (s + 0.5 * (ni * aj + ai * nj) - (na if i == j else 0.0))
+        _add_block(ab, bphi, bphi, K, False)
+    # Bend / twist, Gauss-Newton: kappa ~ (phi_b - R phi_a) / rvl with R = Q_b Q_a^T.
+    nv = ne if closed else ne - 1
+    for j in range(nv):
+        ea = e0 + j
+        eb = ea + 1 if j + 1 < ne else e0
+        vj = v0 + j
+        inv = 1.0 / rest_vor[vj]
+        for i in range(3):
+            for m in range(3):
+                M[i, m] = (Q[eb, i, 0] * Q[ea, m, 0] + Q[eb, i, 1] * Q[ea, m, 1]
+                           + Q[eb, i, 2] * Q[ea, m, 2])
+        for i in range(3):
+            for m in range(3):
+                K[i, m] = (M[0, i] * B[vj, 0] * M[0, m] + M[1, i] * B[vj, 1] * M[1, m]
+                           + M[2, i] * B[vj, 2] * M[2, m]) * inv
+        ba = 2 * j + 1
+        bb = 2 * (j + 1) + 1 if j + 1 < ne else 1
+        _add_block(ab, ba, ba, K, False)
+        for i in range(3):
+            for m in range(3):
+                K[i, m] = B[vj, i] * inv if i == m else 0.0
+        _add_block(ab, bb, bb, K, False)
+        for i in range(3):
+            for m in range(3):
+                K[i, m] = -B[vj, i] * M[i, m] * inv
+        _add_block(ab, bb, ba, K, False)
+    return 3 * nb
+
+
+@njit(cache=True, error_model="numpy")
+def _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on, force,
+              contact_force, ab, finalize):
+    """Implicit plane contact on one rod: forces into ``force``, stiffness onto the diagonal.
+
+    Normal: penalty ``k d - c v_n``. Tangential: a stick spring of stiffness k from the anchor,
+    capped at mu_s N (stick) and otherwise sliding at mu_k N. With ``finalize`` the anchors of
+    sliding nodes are moved along (end of step).
+    """
+    for i in range(nn):
+        g = n0 + i
+        contact_force[g, 0] = 0.0
+        contact_force[g, 1] = 0.0
+        contact_force[g, 2] = 0.0
+        touching = False
+        for p in range(planes.shape[0]):
+            nx, ny, nz = planes[p, 3], planes[p, 4], planes[p, 5]
+            gap = ((pos[g, 0] - planes[p, 0]) * nx + (pos[g, 1] - planes[p, 1]) * ny
+                   + (pos[g, 2] - planes[p, 2]) * nz - node_radius[g])
+            if gap >= 0.0:
+                continue
+            touching = True
+            k = planes[p, 6]
+            c = planes[p, 7]
+            if planes[p, 10] > 0.0:
+                k = mass[g] * (0.2 / min(h, 1e-4)) ** 2
+            if c < 0.0:
+                c = 2.0 * math.sqrt(k * mass[g])
+            vn = vel[g, 0] * nx + vel[g, 1] * ny + vel[g, 2] * nz
+            fn = -k * gap - c * vn
+            knn = k + c / h
+            if fn <= 0.0:
+                fn = 0.0
+                knn = 0.0
+            f0, f1, f2 = fn * nx, fn * ny, fn * nz
+            # Tangential: spring from the anchor (the touch-down point if new).
+            if anchor_on[g] == 0:
+                for d in range(3):
+                    anchor[g, d] = xn[g, d]
+                anchor_on[g] = 1
+            d0 = pos[g, 0] - anchor[g, 0]
+            d1 = pos[g, 1] - anchor[g, 1]
+            d2 = pos[g, 2] - anchor[g, 2]
+            dn = d0 * nx + d1 * ny + d2 * nz
+            d0 -= dn * nx
+            d1 -= dn * ny
+            d2 -= dn * nz
+            dmag = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            mu_s, mu_k = planes[p, 8], planes[p, 9]
+            kt_iso = 0.0  # stiffness on the tangent plane
+            kt_dir = 0.0  # stiffness removed along the sliding direction
+            if k * dmag <= mu_s * fn:
+                f0 -= k * d0
+                f1 -= k * d1
+                f2 -= k * d2
+                kt_iso = k
+            else:
+                ft = mu_k * fn
+                f0 -= ft * d0 / dmag
+                f1 -= ft * d1 / dmag
+                f2 -= ft * d2 / dmag
+                kt_iso = ft / dmag
+                kt_dir = kt_iso
+                if finalize:
+                    back = ft / (k * dmag)
+                    anchor[g, 0] = pos[g, 0] - back * d0
+                    anchor[g, 1] = pos[g, 1] - back * d1
+                    anchor[g, 2] = pos[g, 2] - back * d2
+            force[g, 0] += f0
+            force[g, 1] += f1
+            force[g, 2] += f2
+            contact_force[g, 0] += f0
+            contact_force[g, 1] += f1
+            contact_force[g, 2] += f2
+            if ab.shape[0] > 0:
+                nv = (nx, ny, nz)
+                dv = (d0 / (dmag + 1e-300), d1 / (dmag + 1e-300), d2 / (dmag + 1e-300))
+                for a in range(3):
+                    for b in range(a + 1):
+                        kab = (knn - kt_iso) * nv[a] * nv[b] - kt_dir * dv[a] * dv[b]
+                        if a == b:
+                            kab += kt_iso
+                        ab[6 * i + a, a - b] += kab
+        if not touching:
+            anchor_on[g] = 0
+
+
+@njit(cache=True, error_model="numpy")
+def advance_rod_implicit(
+    r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
+    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_pcon, rod_fcon,
+    pos, vel, mass, node_radius, fext, force, contact_force,
+    Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
+    B, rest_vor, rest_kappa, kappa, couple,
+    scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+    pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
+    planes, status, xn, vn, Qn, wn, anchor, anchor_on, stats,
+):
+    """Advance rod ``r`` by ``n_steps`` backward-Euler steps of ``dt``; returns the new time."""
+    h = dt
+    n0 = rod_node0[r]
+    e0 = rod_elem0[r]
+    v0 = rod_vor0[r]
+    ne = rod_ne[r]
+    closed = rod_closed[r] != 0
+    nn = ne if closed else ne + 1
+    nv = ne if closed else ne - 1
+    c0, c1 = rod_pcon[r], rod_pcon[r + 1]
+    f0, f1 = rod_fcon[r], rod_fcon[r + 1]
+    nu = rod_nu[r]
+    nb = 2 * ne + (0 if closed else 1)
+    ndof = 3 * nb
+    ab = np.zeros((ndof, BAND + 1))
+    rhs = np.zeros(ndof)
+    fixed = np.zeros(ndof, dtype=np.bool_)
+    M = np.empty((3, 3))
+    K = np.empty((3, 3))
+    no_band = np.zeros((0, BAND + 1))
+    # Clamped unknowns: their values are prescribed, so their rows/columns drop out.
+    for c in range(c0, c1):
+        i = pcon_node[c] - n0
+        for d in range(3):
+            fixed[6 * i + d] = True
+    for c in range(f0, f1):
+        k = fcon_elem[c] - e0
+        for d in range(3):
+            fixed[3 * (2 * k + 1) + d] = True
+    length_scale = 0.0
+    for k in range(ne):
+        length_scale += rest_len[e0 + k]
+    length_scale /= ne
+
+    for step in range(n_steps):
+        for i in range(n0, n0 + nn):
+            for d in range(3):
+                xn[i, d] = pos[i, d]
+                vn[i, d] = vel[i, d]
+        for e in range(e0, e0 + ne):
+            for a in range(3):
+                wn[e, a] = omega[e, a]
+                for b in range(3):
+                    Qn[e, a, b] = Q[e, a, b]
+        # Predictor: constant velocity.
+        for i in range(n0, n0 + nn):
+            for d in range(3):
+                pos[i, d] += h * vel[i, d]
+        for e in range(e0, e0 + ne):
+            rotate_directors(Q, e, h, omega[e, 0], omega[e, 1], omega[e, 2])
+        t_new = t + h
+        _constrain_values(t_new, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data)
+
+        converged = False
+        it = 0
+        update = 0.0
+        while it < max_iter:
+            it += 1
+            # Velocities implied by the iterate.
+            for i in range(n0, n0 + nn):
+                for d in range(3):
+                    vel[i, d] = (pos[i, d] - xn[i, d]) / h
+            for e in range(e0, e0 + ne):
+                w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
+                omega[e, 0] = w0 / h
+                omega[e, 1] = w1 / h
+                omega[e, 2] = w2 / h
+            rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
+                               pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
+                               rest_kappa, force, torque, dil, kappa, stress, couple,
+                               scr_lab, scr_C, scr_X, scr_edot, scr_vdil)
+            code, kk = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
+            if code != OK:
+                status[r, 0] = code
+                status[r, 1] = kk
+                status[r, 2] = step
+                return t
+            for i in range(n0, n0 + nn):
+                for d in range(3):
+                    force[i, d] += mass[i] * gravity[d] + fext[i, d]
+            _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B,
+                      rest_vor, mass, J, nu, ab, M, K)
+            if planes.shape[0] > 0:
+                _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on,
+                          force, contact_force, ab, False)
+            # Residual (negated): forces minus inertia and damping.
+            for i in range(nn):
+                g = n0 + i
+                for d in range(3):
+                    rhs[6 * i + d] = force[g, d] - mass[g] * ((vel[g, d] - vn[g, d]) / h + nu * vel[g, d])
+            for k in range(ne):
+                e = e0 + k
+                for d in range(3):
+                    rhs[3 * (2 * k + 1) + d] = (torque[e, d] + text[e, d] - J[e, d] / dil[e] * (
+                        (omega[e, d] - wn[e, d]) / h + nu * omega[e, d]))
+            for q in range(ndof):
+                if fixed[q]:
+                    rhs[q] = 0.0
+                    for k in range(1, BAND + 1):
+                        ab[q, k] = 0.0
+                        if q + k < ndof:
+                            ab[q + k, k] = 0.0
+                    ab[q, 0] = 1.0
+            bad = band_cholesky(ab, ndof, BAND)
+            if bad != 0:
+                status[r, 0] = NOT_CONVERGED
+                status[r, 1] = (bad - 1) // 6
+                status[r, 2] = step
+                return t
+            band_solve(ab, ndof, BAND, rhs)
+            # Apply the update: positions add, frames rotate by the material rotation vector.
+            update = 0.0
+            for i in range(nn):
+                g = n0 + i
+                for d in range(3):
+                    pos[g, d] += rhs[6 * i + d]
+                    update = max(update, abs(rhs[6 * i + d]))
+            for k in range(ne):
+                b = 3 * (2 * k + 1)
+                rotate_directors(Q, e0 + k, 1.0, rhs[b], rhs[b + 1], rhs[b + 2])
+                update = max(update, length_scale * (abs(rhs[b]) + abs(rhs[b + 1]) + abs(rhs[b + 2])))
+            if update <= tol * length_scale:
+                converged = True
+                break
+        # Final velocities and contact bookkeeping at the accepted iterate.
+        for i in range(n0, n0 + nn):
+            for d in range(3):
+                vel[i, d] = (pos[i, d] - xn[i, d]) / h
+        for e in range(e0, e0 + ne):
+            w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
+            omega[e, 0] = w0 / h
+            omega[e, 1] = w1 / h
+            omega[e, 2] = w2 / h
+        if planes.shape[0] > 0:
+            _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on,
+                      force, contact_force, no_band, True)
+        # Clamped nodes and frames move with their prescribed velocities.
+        for c in range(c0, c1):
+            for d in range(3):
+                vel[pcon_node[c], d] = pcon_data[c, 3 + d]
+        for c in range(f0, f1):
+            e = fcon_elem[c]
+            for d in range(3):
+                omega[e, d] = (Q[e, d, 0] * fcon_data[c, 0] + Q[e, d, 1] * fcon_data[c, 1]
+                               + Q[e, d, 2] * fcon_data[c, 2])
+        t = t_new
+        stats[r, 0] += 1
+        stats[r, 1] += it
+        if not converged:
+            stats[r, 2] += 1
+        stats[r, 3] = update / length_scale
+    status[r, 2] = n_steps
+    return t
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def advance_rods_implicit(
+    r_begin, r_end, n_steps, t, dt, gravity, max_strain, max_iter, tol,
+    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_pcon, rod_fcon,
+    pos, vel, mass, node_radius, fext, force, contact_force,
+    Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
+    B, rest_vor, rest_kappa, kappa, couple,
+    scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+    pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
+    planes, status, times, xn, vn, Qn, wn, anchor, anchor_on, stats,
+):
+    """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods."""
+    for r in range(r_begin, r_end):
+        times[r] = advance_rod_implicit(
+            r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
+            rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_pcon, rod_fcon,
+            pos, vel, mass, node_radius, fext, force, contact_force,
+            Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
+            B, rest_vor, rest_kappa, kappa, couple,
+            scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+            pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
+            planes, status, xn, vn, Qn, wn, anchor, anchor_on, stats)
