@@ -60,6 +60,8 @@ class Block:
         self.vn = np.zeros((N, 3))
         self.Qn = np.tile(np.eye(3), (E, 1, 1))
         self.wn = np.zeros((E, 3))
+        self.fn_el = np.zeros((N, 3))
+        self.tn_el = np.zeros((E, 3))
         self.anchor = np.zeros((N, 3))
         self.anchor_on = np.zeros(N, dtype=np.int64)
         self.stats = np.zeros((R, 4))

@@ -82,13 +82,14 @@ class Rod:
     def __init__(self, positions: np.ndarray, directors: np.ndarray, *, radius: float,
                  density: float, youngs_modulus: float, shear_modulus: float | None = None,
                  poisson_ratio: float | None = None, damping: float = 0.0, closed: bool = False,
-                 rest_kappa: np.ndarray | None = None) -> None:
+                 rest_kappa: np.ndarray | None = None, internal_damping: float = 0.0) -> None:
         self.closed = bool(closed)
         self.radius = check.positive("radius", radius, "m")
         self.density = check.positive("density", density, "kg/m^3")
         self.youngs_modulus = check.positive("youngs_modulus", youngs_modulus, "Pa")
         self.shear_modulus = shear_modulus_from(self.youngs_modulus, shear_modulus, poisson_ratio)
         self._damping = check.non_negative("damping", damping, "1/s")
+        self._internal_damping = check.non_negative("internal_damping", internal_damping, "s")
 
         pos = np.array(positions, dtype=np.float64)
         Q = np.array(directors, dtype=np.float64)
@@ -155,7 +156,8 @@ class Rod:
                  radius: float = 0.005, density: float = 1000.0, youngs_modulus: float = 1e6,
                  shear_modulus: float | None = None, poisson_ratio: float | None = None,
                  normal: Sequence[float] | None = None, damping: float = 0.0,
-                 rest_curvature: np.ndarray | Sequence[float] | None = None) -> "Rod":
+                 rest_curvature: np.ndarray | Sequence[float] | None = None,
+                 internal_damping: float = 0.0) -> "Rod":
         """Straight rod of ``length`` m from ``start`` along ``direction``.
 
         ``normal`` is d1 of the material frames (must be perpendicular to ``direction``);
@@ -184,14 +186,15 @@ class Rod:
         Q[:, 2] = tangents
         return cls(pos, Q, radius=radius, density=density, youngs_modulus=youngs_modulus,
                    shear_modulus=shear_modulus, poisson_ratio=poisson_ratio, damping=damping,
-                   rest_kappa=rest_curvature)
+                   rest_kappa=rest_curvature, internal_damping=internal_damping)
 
     @classmethod
     def from_points(cls, points: np.ndarray | Sequence[Sequence[float]], *, radius: float = 0.005,
                     density: float = 1000.0, youngs_modulus: float = 1e6,
                     shear_modulus: float | None = None, poisson_ratio: float | None = None,
                     closed: bool = False, rest_shape: str = "given",
-                    normal: Sequence[float] | None = None, damping: float = 0.0) -> "Rod":
+                    normal: Sequence[float] | None = None, damping: float = 0.0,
+                    internal_damping: float = 0.0) -> "Rod":
         """Rod through ``points`` (m, shape (m, 3)); one element per segment.
 
         ``closed=True`` joins the last point to the first (a ring). ``rest_shape="given"``
@@ -224,7 +227,7 @@ class Rod:
         Q = _transported_directors(tangents, d1)
         rod = cls(pts, Q, radius=radius, density=density, youngs_modulus=youngs_modulus,
                   shear_modulus=shear_modulus, poisson_ratio=poisson_ratio, damping=damping,
-                  closed=closed)
+                  closed=closed, internal_damping=internal_damping)
         if rest_shape == "given":
             rod.rest_kappa = curvature_from_directors(Q, rod.rest_voronoi_lengths, rod.closed)
         return rod
@@ -237,6 +240,22 @@ class Rod:
     @damping.setter
     def damping(self, value: float) -> None:
         self._damping = check.non_negative("damping", value, "1/s")
+        if self._world is not None:
+            self._world._dirty = True
+
+    @property
+    def internal_damping(self) -> float:
+        """Kelvin-Voigt retardation time (s) of the material (stable integrator only).
+
+        Internal stresses get a viscous part ``internal_damping * d(stress)/dt``: a bending
+        mode of angular frequency w is damped with ratio ``w * internal_damping / 2``, so
+        higher modes lose energy faster, as in real cables.
+        """
+        return self._internal_damping
+
+    @internal_damping.setter
+    def internal_damping(self, value: float) -> None:
+        self._internal_damping = check.non_negative("internal_damping", value, "s")
         if self._world is not None:
             self._world._dirty = True
 

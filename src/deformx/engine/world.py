@@ -191,6 +191,10 @@ class World:
             self._rod_pcon, self._rod_fcon,
             b.pos, b.vel, b.mass, b.node_radius, b.fext, b.force, b.contact_force)
         if self.integrator == "verlet":
+            viscous = [i for i, r in enumerate(self._rods) if r.internal_damping > 0.0]
+            if viscous:
+                raise ValueError(f"internal_damping: rod {viscous[0]} sets it, but it needs "
+                                 "integrator='stable' (explicit steps cannot afford it)")
             decay = np.array([math.exp(-r.damping * self._dt) for r in self._rods])
             self._kernel = verlet.advance_rods
             self._args = (
@@ -202,16 +206,18 @@ class World:
                 self._planes_arr, self._status, self._times)
         else:
             rates = np.array([r.damping for r in self._rods])
+            retardation = np.array([r.internal_damping for r in self._rods])
             self._kernel = implicit.advance_rods_implicit
             self._args = (
                 self.iterations, self.tolerance,
-                b.rod_node0, b.rod_elem0, b.rod_vor0, b.rod_ne, b.rod_closed, rates, *common,
+                b.rod_node0, b.rod_elem0, b.rod_vor0, b.rod_ne, b.rod_closed, rates, retardation,
+                *common,
                 b.Q, b.omega, b.J, b.S, b.rest_len, b.rest_sigma, b.text, b.torque,
                 b.dil, b.stress, b.B, b.rest_vor, b.rest_kappa, b.kappa, b.couple,
                 b.scr_lab, b.scr_C, b.scr_X, b.scr_edot, b.scr_vdil,
                 self._pcon_node, self._pcon_data, self._fcon_elem, self._fcon_Q0, self._fcon_data,
                 self._planes_arr, self._status, self._times,
-                b.xn, b.vn, b.Qn, b.wn, b.anchor, b.anchor_on, b.stats)
+                b.xn, b.vn, b.Qn, b.wn, b.fn_el, b.tn_el, b.anchor, b.anchor_on, b.stats)
         self._dirty = False
 
     def step(self, n_steps: int = 1) -> None:

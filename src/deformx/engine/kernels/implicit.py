@@ -66,8 +66,11 @@ def _skew(v0, v1, v2, i, j):
 
 @njit(cache=True, error_model="numpy")
 def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B, rest_vor,
-              mass, J, nu, ab, M, K):
-    """Newton matrix of one rod into ``ab`` (lower band); returns the number of unknowns."""
+              mass, J, nu, kv, ab, M, K):
+    """Newton matrix of one rod into ``ab`` (lower band); returns the number of unknowns.
+
+    ``kv`` = 1 + (Kelvin-Voigt retardation time) / h scales the elastic stiffness.
+    """
     nb = 2 * ne + (0 if closed else 1)
     for i in range(3 * nb):
         for k in range(BAND + 1):
@@ -94,12 +97,13 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
         a0 = (Q[e, 0, 0] * dx0 + Q[e, 0, 1] * dx1 + Q[e, 0, 2] * dx2) / l0
         a1 = (Q[e, 1, 0] * dx0 + Q[e, 1, 1] * dx1 + Q[e, 1, 2] * dx2) / l0
         a2 = (Q[e, 2, 0] * dx0 + Q[e, 2, 1] * dx1 + Q[e, 2, 2] * dx2) / l0
-        n0_, n1_, n2_ = stress[e, 0], stress[e, 1], stress[e, 2]
+        n0_, n1_, n2_ = stress[e, 0] * kv, stress[e, 1] * kv, stress[e, 2] * kv
+        Sk0, Sk1, Sk2 = S[e, 0] * kv, S[e, 1] * kv, S[e, 2] * kv
         # Node-node: Q^T S Q / l0 (exact: sigma is linear in positions at fixed frames).
         for i in range(3):
             for j in range(3):
-                K[i, j] = (Q[e, 0, i] * S[e, 0] * Q[e, 0, j] + Q[e, 1, i] * S[e, 1] * Q[e, 1, j]
-                           + Q[e, 2, i] * S[e, 2] * Q[e, 2, j]) / l0
+                K[i, j] = (Q[e, 0, i] * Sk0 * Q[e, 0, j] + Q[e, 1, i] * Sk1 * Q[e, 1, j]
+                           + Q[e, 2, i] * Sk2 * Q[e, 2, j]) / l0
         _add_block(ab, bx, bx, K, False)
         _add_block(ab, by, by, K, False)
         for i in range(3):
@@ -111,7 +115,8 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
             for j in range(3):
                 s = 0.0
                 for m in range(3):
-                    s += Q[e, m, i] * (S[e, m] * _skew(a0, a1, a2, m, j) - _skew(n0_, n1_, n2_, m, j))
+                    Sm = Sk0 if m == 0 else (Sk1 if m == 1 else Sk2)
+                    s += Q[e, m, i] * (Sm * _skew(a0, a1, a2, m, j) - _skew(n0_, n1_, n2_, m, j))
                 M[i, j] = s
                 K[i, j] = -s
         _add_block(ab, by, bphi, M, False)
@@ -126,7 +131,8 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
                 aj = a0 if j == 0 else (a1 if j == 1 else a2)
                 s = 0.0
                 for m in range(3):
-                    s += _skew(a0, a1, a2, m, i) * S[e, m] * _skew(a0, a1, a2, m, j)
+                    Sm = Sk0 if m == 0 else (Sk1 if m == 1 else Sk2)
+                    s += _skew(a0, a1, a2, m, i) * Sm * _skew(a0, a1, a2, m, j)
                 K[i, j] = l0 * (s + 0.5 * (ni * aj + ai * nj) - (na if i == j else 0.0))
         _add_block(ab, bphi, bphi, K, False)
     # Bend / twist, Gauss-Newton: kappa ~ (phi_b - R phi_a) / rvl with R = Q_b Q_a^T.
@@ -135,7 +141,7 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
         ea = e0 + j
         eb = ea + 1 if j + 1 < ne else e0
         vj = v0 + j
-        inv = 1.0 / rest_vor[vj]
+        inv = kv / rest_vor[vj]
         for i in range(3):
             for m in range(3):
                 M[i, m] = (Q[eb, i, 0] * Q[ea, m, 0] + Q[eb, i, 1] * Q[ea, m, 1]
@@ -248,15 +254,19 @@ def _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor
 @njit(cache=True, error_model="numpy")
 def advance_rod_implicit(
     r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
-    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_pcon, rod_fcon,
+    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_tau, rod_pcon, rod_fcon,
     pos, vel, mass, node_radius, fext, force, contact_force,
     Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, xn, vn, Qn, wn, anchor, anchor_on, stats,
+    planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, stats,
 ):
-    """Advance rod ``r`` by ``n_steps`` backward-Euler steps of ``dt``; returns the new time."""
+    """Advance rod ``r`` by ``n_steps`` backward-Euler steps of ``dt``; returns the new time.
+
+    ``rod_nu`` is the uniform damping rate (1/s), ``rod_tau`` the Kelvin-Voigt retardation
+    time (s): internal loads become F + tau dF/dt with dF/dt ~ (F - F_n) / h.
+    """
     h = dt
     n0 = rod_node0[r]
     e0 = rod_elem0[r]
@@ -268,6 +278,8 @@ def advance_rod_implicit(
     c0, c1 = rod_pcon[r], rod_pcon[r + 1]
     f0, f1 = rod_fcon[r], rod_fcon[r + 1]
     nu = rod_nu[r]
+    tau = rod_tau[r]
+    kv = 1.0 + tau / h
     nb = 2 * ne + (0 if closed else 1)
     ndof = 3 * nb
     ab = np.zeros((ndof, BAND + 1))
@@ -300,6 +312,17 @@ def advance_rod_implicit(
                 wn[e, a] = omega[e, a]
                 for b in range(3):
                     Qn[e, a, b] = Q[e, a, b]
+        if tau > 0.0:  # internal loads at the step start, for the viscous (rate) term
+            rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
+                               pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
+                               rest_kappa, force, torque, dil, kappa, stress, couple,
+                               scr_lab, scr_C, scr_X, scr_edot, scr_vdil)
+            for i in range(n0, n0 + nn):
+                for d in range(3):
+                    fn_el[i, d] = force[i, d]
+            for e in range(e0, e0 + ne):
+                for d in range(3):
+                    tn_el[e, d] = torque[e, d]
         # Predictor: constant velocity.
         for i in range(n0, n0 + nn):
             for d in range(3):
@@ -333,11 +356,18 @@ def advance_rod_implicit(
                 status[r, 1] = kk
                 status[r, 2] = step
                 return t
+            if tau > 0.0:
+                for i in range(n0, n0 + nn):
+                    for d in range(3):
+                        force[i, d] += (tau / h) * (force[i, d] - fn_el[i, d])
+                for e in range(e0, e0 + ne):
+                    for d in range(3):
+                        torque[e, d] += (tau / h) * (torque[e, d] - tn_el[e, d])
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     force[i, d] += mass[i] * gravity[d] + fext[i, d]
             _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B,
-                      rest_vor, mass, J, nu, ab, M, K)
+                      rest_vor, mass, J, nu, kv, ab, M, K)
             if planes.shape[0] > 0:
                 _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on,
                           force, contact_force, ab, False)
@@ -414,22 +444,22 @@ def advance_rod_implicit(
 @njit(cache=True, nogil=True, error_model="numpy")
 def advance_rods_implicit(
     r_begin, r_end, n_steps, t, dt, gravity, max_strain, max_iter, tol,
-    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_pcon, rod_fcon,
+    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_tau, rod_pcon, rod_fcon,
     pos, vel, mass, node_radius, fext, force, contact_force,
     Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, times, xn, vn, Qn, wn, anchor, anchor_on, stats,
+    planes, status, times, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, stats,
 ):
     """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods."""
     for r in range(r_begin, r_end):
         times[r] = advance_rod_implicit(
             r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
-            rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_pcon, rod_fcon,
+            rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_tau, rod_pcon, rod_fcon,
             pos, vel, mass, node_radius, fext, force, contact_force,
             Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
             B, rest_vor, rest_kappa, kappa, couple,
             scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
             pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-            planes, status, xn, vn, Qn, wn, anchor, anchor_on, stats)
+            planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, stats)
