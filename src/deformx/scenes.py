@@ -88,6 +88,8 @@ class Material(_Model):
     poisson_ratio: Annotated[float, Field(gt=-1.0, le=0.5)] | None = Field(
         None, description="default 0.5 (incompressible); give this or shear_modulus, not both")
     damping: NonNegativeFloat = Field(0.0, description="1/s, uniform analytical damping")
+    internal_damping: NonNegativeFloat = Field(
+        0.0, description="s, Kelvin-Voigt retardation time (stable integrator only)")
 
     @model_validator(mode="after")
     def _one_of_shear(self) -> "Material":
@@ -207,7 +209,11 @@ class Scene(_Model):
 
     gravity: FiniteVec3 = (0.0, 0.0, -9.81)
     dt: Annotated[float, Field(gt=0.0, le=0.1, allow_inf_nan=False)] = 1.0e-4
-    integrator: str = Field("verlet", description="'verlet' (explicit); 'stable' when the engine provides it")
+    integrator: str = Field("verlet", description="'verlet' (explicit) or 'stable' (large steps)")
+    iterations: Annotated[int, Field(ge=1, le=100)] = Field(
+        4, description="stable integrator: Newton iterations per step at most")
+    tolerance: Annotated[float, Field(gt=0.0, lt=1.0)] = Field(
+        1.0e-6, description="stable integrator: converged update / element length")
     duration: Annotated[float, Field(gt=0.0, le=1.0e6, allow_inf_nan=False)] = 1.0
     rods: Annotated[list[RodSpec], Field(min_length=1)] = Field(default_factory=lambda: [StraightRod()])
     planes: list[Plane] = Field(default_factory=list)
@@ -306,7 +312,7 @@ def estimate_stable_dt(length: float, n_elements: int, radius: float, density: f
 
 def _material_kwargs(m: Material) -> dict:
     kw: dict[str, Any] = dict(radius=m.radius, density=m.density, youngs_modulus=m.youngs_modulus,
-                              damping=m.damping)
+                              damping=m.damping, internal_damping=m.internal_damping)
     if m.shear_modulus is not None:
         kw["shear_modulus"] = m.shear_modulus
     if m.poisson_ratio is not None:
@@ -327,7 +333,8 @@ def build_world(scene: Scene):
     import deformx as dx
 
     try:
-        world = dx.World(gravity=scene.gravity, dt=scene.dt, integrator=scene.integrator)
+        world = dx.World(gravity=scene.gravity, dt=scene.dt, integrator=scene.integrator,
+                         iterations=scene.iterations, tolerance=scene.tolerance)
     except (ValueError, NotImplementedError) as err:
         field = "integrator" if "integrator" in str(err) or isinstance(err, NotImplementedError) else "dt"
         raise _rewrap(field, err) from err

@@ -64,7 +64,7 @@ class Block:
         self.tn_el = np.zeros((E, 3))
         self.anchor = np.zeros((N, 3))
         self.anchor_on = np.zeros(N, dtype=np.int64)
-        self.stats = np.zeros((R, 4))
+        self.stats = np.zeros((R, 5))
 
         self.B = np.zeros((V, 3))
         self.rest_vor = np.ones(V)

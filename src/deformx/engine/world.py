@@ -304,16 +304,18 @@ class World:
 
     def solver_stats(self) -> dict[str, float]:
         """Newton statistics of the stable integrator since the world was built: steps,
-        mean iterations per step, steps that hit the iteration cap, and the last relative
-        update (update size / element length, compare with ``tolerance``)."""
+        mean iterations per step, (sub-)steps that hit the iteration cap, the last relative
+        update (update size / element length, compare with ``tolerance``) and how often a
+        step had to be halved because Newton did not converge (``halvings``)."""
         if self.integrator != "stable" or self._block is None:
-            return {"steps": 0, "mean_iterations": 0.0, "capped_steps": 0, "last_update": 0.0}
+            return {"steps": 0, "mean_iterations": 0.0, "capped_steps": 0, "last_update": 0.0,
+                    "halvings": 0}
         st = self._block.stats
-        steps = int(st[:, 0].max())
-        return {"steps": steps,
+        return {"steps": int(st[:, 0].max()),
                 "mean_iterations": float(st[:, 1].sum() / max(st[:, 0].sum(), 1)),
                 "capped_steps": int(st[:, 2].sum()),
-                "last_update": float(st[:, 3].max())}
+                "last_update": float(st[:, 3].max()),
+                "halvings": int(st[:, 4].sum())}
 
     def contact_forces(self, rod: Rod) -> np.ndarray:
         """Plane contact forces (n_nodes, 3), N, on ``rod`` during the last step."""

@@ -31,8 +31,12 @@ from .so3 import relative_rotation_vector, rotate_directors
 from .verlet import OK, _check, _constrain_values
 
 BAND = 8  # scalar half bandwidth: coupled 3x3 blocks are at most two blocks apart
-NOT_CONVERGED = 4  # status code: the Newton matrix was not positive definite
-N_STATS = 4  # per rod: steps, Newton iterations, steps at the iteration cap, last relative update
+NOT_CONVERGED = 4  # status code: Newton failed even on a tiny fraction of the step
+# per rod: steps, Newton iterations, sub-steps at the iteration cap, last relative update,
+# step halvings
+N_STATS = 5
+ACCEPT = 1e-2  # an unconverged update above this fraction of an element length is rejected
+MAX_REFINE = 64.0  # a step is halved at most down to dt / MAX_REFINE before giving up
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -66,10 +70,13 @@ def _skew(v0, v1, v2, i, j):
 
 @njit(cache=True, error_model="numpy")
 def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B, rest_vor,
-              mass, J, nu, kv, ab, M, K):
+              mass, J, nu, kv, geometric, ab, M, K):
     """Newton matrix of one rod into ``ab`` (lower band); returns the number of unknowns.
 
-    ``kv`` = 1 + (Kelvin-Voigt retardation time) / h scales the elastic stiffness.
+    ``kv`` = 1 + (Kelvin-Voigt retardation time) / h scales the elastic stiffness. The stress
+    (geometric) terms are added for elements in tension only, and only with ``geometric``:
+    in compression they can make the matrix indefinite (buckling), and Gauss-Newton alone is
+    positive definite by construction.
     """
     nb = 2 * ne + (0 if closed else 1)
     for i in range(3 * nb):
@@ -98,6 +105,8 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
         a1 = (Q[e, 1, 0] * dx0 + Q[e, 1, 1] * dx1 + Q[e, 1, 2] * dx2) / l0
         a2 = (Q[e, 2, 0] * dx0 + Q[e, 2, 1] * dx1 + Q[e, 2, 2] * dx2) / l0
         n0_, n1_, n2_ = stress[e, 0] * kv, stress[e, 1] * kv, stress[e, 2] * kv
+        if not geometric or n0_ * a0 + n1_ * a1 + n2_ * a2 <= 0.0:
+            n0_, n1_, n2_ = 0.0, 0.0, 0.0
         Sk0, Sk1, Sk2 = S[e, 0] * kv, S[e, 1] * kv, S[e, 2] * kv
         # Node-node: Q^T S Q / l0 (exact: sigma is linear in positions at fixed frames).
         for i in range(3):
@@ -166,7 +175,7 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
 
 @njit(cache=True, error_model="numpy")
 def _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on, force,
-              contact_force, ab, finalize):
+              contact_force, ab, finalize, add_forces):
     """Implicit plane contact on one rod: forces into ``force``, stiffness onto the diagonal.
 
     Normal: penalty ``k d - c v_n``. Tangential: a stick spring of stiffness k from the anchor,
@@ -232,9 +241,10 @@ def _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor
                     anchor[g, 0] = pos[g, 0] - back * d0
                     anchor[g, 1] = pos[g, 1] - back * d1
                     anchor[g, 2] = pos[g, 2] - back * d2
-            force[g, 0] += f0
-            force[g, 1] += f1
-            force[g, 2] += f2
+            if add_forces:
+                force[g, 0] += f0
+                force[g, 1] += f1
+                force[g, 2] += f2
             contact_force[g, 0] += f0
             contact_force[g, 1] += f1
             contact_force[g, 2] += f2
@@ -268,6 +278,7 @@ def advance_rod_implicit(
     time (s): internal loads become F + tau dF/dt with dF/dt ~ (F - F_n) / h.
     """
     h = dt
+    kv = 1.0
     n0 = rod_node0[r]
     e0 = rod_elem0[r]
     v0 = rod_vor0[r]
@@ -279,7 +290,6 @@ def advance_rod_implicit(
     f0, f1 = rod_fcon[r], rod_fcon[r + 1]
     nu = rod_nu[r]
     tau = rod_tau[r]
-    kv = 1.0 + tau / h
     nb = 2 * ne + (0 if closed else 1)
     ndof = 3 * nb
     ab = np.zeros((ndof, BAND + 1))
@@ -302,7 +312,10 @@ def advance_rod_implicit(
         length_scale += rest_len[e0 + k]
     length_scale /= ne
 
-    for step in range(n_steps):
+    done = 0  # full steps completed
+    hs = h  # current sub-step (halved when Newton fails, back to h at each full step)
+    elapsed = 0.0  # time done within the current full step
+    while done < n_steps:
         for i in range(n0, n0 + nn):
             for d in range(3):
                 xn[i, d] = pos[i, d]
@@ -312,6 +325,7 @@ def advance_rod_implicit(
                 wn[e, a] = omega[e, a]
                 for b in range(3):
                     Qn[e, a, b] = Q[e, a, b]
+        kv = 1.0 + tau / hs
         if tau > 0.0:  # internal loads at the step start, for the viscous (rate) term
             rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                                pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
@@ -326,13 +340,15 @@ def advance_rod_implicit(
         # Predictor: constant velocity.
         for i in range(n0, n0 + nn):
             for d in range(3):
-                pos[i, d] += h * vel[i, d]
+                pos[i, d] += hs * vel[i, d]
         for e in range(e0, e0 + ne):
-            rotate_directors(Q, e, h, omega[e, 0], omega[e, 1], omega[e, 2])
-        t_new = t + h
+            rotate_directors(Q, e, hs, omega[e, 0], omega[e, 1], omega[e, 2])
+        t_new = t + hs
         _constrain_values(t_new, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data)
 
         converged = False
+        failed = OK
+        fail_at = -1
         it = 0
         update = 0.0
         while it < max_iter:
@@ -340,61 +356,67 @@ def advance_rod_implicit(
             # Velocities implied by the iterate.
             for i in range(n0, n0 + nn):
                 for d in range(3):
-                    vel[i, d] = (pos[i, d] - xn[i, d]) / h
+                    vel[i, d] = (pos[i, d] - xn[i, d]) / hs
             for e in range(e0, e0 + ne):
                 w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
-                omega[e, 0] = w0 / h
-                omega[e, 1] = w1 / h
-                omega[e, 2] = w2 / h
+                omega[e, 0] = w0 / hs
+                omega[e, 1] = w1 / hs
+                omega[e, 2] = w2 / hs
             rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                                pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                                rest_kappa, force, torque, dil, kappa, stress, couple,
                                scr_lab, scr_C, scr_X, scr_edot, scr_vdil)
-            code, kk = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
-            if code != OK:
-                status[r, 0] = code
-                status[r, 1] = kk
-                status[r, 2] = step
-                return t
+            failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
+            if failed != OK:
+                break
             if tau > 0.0:
                 for i in range(n0, n0 + nn):
                     for d in range(3):
-                        force[i, d] += (tau / h) * (force[i, d] - fn_el[i, d])
+                        force[i, d] += (tau / hs) * (force[i, d] - fn_el[i, d])
                 for e in range(e0, e0 + ne):
                     for d in range(3):
-                        torque[e, d] += (tau / h) * (torque[e, d] - tn_el[e, d])
+                        torque[e, d] += (tau / hs) * (torque[e, d] - tn_el[e, d])
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     force[i, d] += mass[i] * gravity[d] + fext[i, d]
-            _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B,
-                      rest_vor, mass, J, nu, kv, ab, M, K)
             if planes.shape[0] > 0:
-                _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on,
-                          force, contact_force, ab, False)
+                _contacts(n0, nn, hs, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on,
+                          force, contact_force, no_band, False, True)
             # Residual (negated): forces minus inertia and damping.
             for i in range(nn):
                 g = n0 + i
                 for d in range(3):
-                    rhs[6 * i + d] = force[g, d] - mass[g] * ((vel[g, d] - vn[g, d]) / h + nu * vel[g, d])
+                    rhs[6 * i + d] = force[g, d] - mass[g] * ((vel[g, d] - vn[g, d]) / hs + nu * vel[g, d])
             for k in range(ne):
                 e = e0 + k
                 for d in range(3):
                     rhs[3 * (2 * k + 1) + d] = (torque[e, d] + text[e, d] - J[e, d] / dil[e] * (
-                        (omega[e, d] - wn[e, d]) / h + nu * omega[e, d]))
+                        (omega[e, d] - wn[e, d]) / hs + nu * omega[e, d]))
             for q in range(ndof):
                 if fixed[q]:
                     rhs[q] = 0.0
-                    for k in range(1, BAND + 1):
-                        ab[q, k] = 0.0
-                        if q + k < ndof:
-                            ab[q + k, k] = 0.0
-                    ab[q, 0] = 1.0
-            bad = band_cholesky(ab, ndof, BAND)
+            # Newton matrix; if the stress terms make it indefinite, retry with Gauss-Newton.
+            bad = 1
+            for geometric in (True, False):
+                _assemble(hs, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B,
+                          rest_vor, mass, J, nu, kv, geometric, ab, M, K)
+                if planes.shape[0] > 0:
+                    _contacts(n0, nn, hs, planes, pos, vel, xn, mass, node_radius, anchor,
+                              anchor_on, force, contact_force, ab, False, False)
+                for q in range(ndof):
+                    if fixed[q]:
+                        for k in range(1, BAND + 1):
+                            ab[q, k] = 0.0
+                            if q + k < ndof:
+                                ab[q + k, k] = 0.0
+                        ab[q, 0] = 1.0
+                bad = band_cholesky(ab, ndof, BAND)
+                if bad == 0:
+                    break
             if bad != 0:
-                status[r, 0] = NOT_CONVERGED
-                status[r, 1] = (bad - 1) // 6
-                status[r, 2] = step
-                return t
+                failed = NOT_CONVERGED
+                fail_at = (bad - 1) // 6
+                break
             band_solve(ab, ndof, BAND, rhs)
             # Apply the update: positions add, frames rotate by the material rotation vector.
             update = 0.0
@@ -410,19 +432,40 @@ def advance_rod_implicit(
             if update <= tol * length_scale:
                 converged = True
                 break
-        # Final velocities and contact bookkeeping at the accepted iterate.
+        if failed == OK and not converged and update > ACCEPT * length_scale:
+            failed = NOT_CONVERGED
+            fail_at = 0
+        if failed != OK:
+            # Roll back and retry the step in halves; give up only at a tiny fraction of dt.
+            for i in range(n0, n0 + nn):
+                for d in range(3):
+                    pos[i, d] = xn[i, d]
+                    vel[i, d] = vn[i, d]
+            for e in range(e0, e0 + ne):
+                for a in range(3):
+                    omega[e, a] = wn[e, a]
+                    for b in range(3):
+                        Q[e, a, b] = Qn[e, a, b]
+            if hs > h / MAX_REFINE:
+                hs *= 0.5
+                stats[r, 4] += 1
+                continue
+            status[r, 0] = failed
+            status[r, 1] = max(fail_at, 0)
+            status[r, 2] = done
+            return t
+        # Accepted: velocities, friction anchors and clamp rates at the new state.
         for i in range(n0, n0 + nn):
             for d in range(3):
-                vel[i, d] = (pos[i, d] - xn[i, d]) / h
+                vel[i, d] = (pos[i, d] - xn[i, d]) / hs
         for e in range(e0, e0 + ne):
             w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
-            omega[e, 0] = w0 / h
-            omega[e, 1] = w1 / h
-            omega[e, 2] = w2 / h
+            omega[e, 0] = w0 / hs
+            omega[e, 1] = w1 / hs
+            omega[e, 2] = w2 / hs
         if planes.shape[0] > 0:
-            _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on,
-                      force, contact_force, no_band, True)
-        # Clamped nodes and frames move with their prescribed velocities.
+            _contacts(n0, nn, hs, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on,
+                      force, contact_force, no_band, True, False)
         for c in range(c0, c1):
             for d in range(3):
                 vel[pcon_node[c], d] = pcon_data[c, 3 + d]
@@ -432,11 +475,16 @@ def advance_rod_implicit(
                 omega[e, d] = (Q[e, d, 0] * fcon_data[c, 0] + Q[e, d, 1] * fcon_data[c, 1]
                                + Q[e, d, 2] * fcon_data[c, 2])
         t = t_new
-        stats[r, 0] += 1
         stats[r, 1] += it
         if not converged:
             stats[r, 2] += 1
         stats[r, 3] = update / length_scale
+        elapsed += hs
+        if elapsed >= h * (1.0 - 1e-9):
+            done += 1
+            stats[r, 0] += 1
+            elapsed = 0.0
+            hs = h
     status[r, 2] = n_steps
     return t
 
