@@ -213,7 +213,7 @@ class Scene(_Model):
     iterations: Annotated[int, Field(ge=1, le=100)] = Field(
         4, description="stable integrator: Newton iterations per step at most")
     tolerance: Annotated[float, Field(gt=0.0, lt=1.0)] = Field(
-        1.0e-6, description="stable integrator: converged update / element length")
+        1.0e-4, description="stable integrator: converged update / element length")
     duration: Annotated[float, Field(gt=0.0, le=1.0e6, allow_inf_nan=False)] = 1.0
     rods: Annotated[list[RodSpec], Field(min_length=1)] = Field(default_factory=lambda: [StraightRod()])
     planes: list[Plane] = Field(default_factory=list)

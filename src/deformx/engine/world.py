@@ -75,7 +75,7 @@ class World:
     def __init__(self, gravity: Sequence[float] = (0.0, 0.0, -9.81), dt: float = 1e-4,
                  integrator: str = "verlet", max_strain: float = 1.0,
                  threads: int | None = None, iterations: int = 4,
-                 tolerance: float = 1e-6) -> None:
+                 tolerance: float = 1e-4) -> None:
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         self.integrator = integrator

@@ -35,6 +35,7 @@ NOT_CONVERGED = 4  # status code: Newton failed even on a tiny fraction of the s
 # per rod: steps, Newton iterations, sub-steps at the iteration cap, last relative update,
 # step halvings
 N_STATS = 5
+CHORD_RATE = 0.1  # reuse the factor while each update is below this fraction of the last
 ACCEPT = 1e-2  # an unconverged update above this fraction of an element length is rejected
 MAX_REFINE = 64.0  # a step is halved at most down to dt / MAX_REFINE before giving up
 
@@ -56,16 +57,6 @@ def _add_block(ab, I, J, M, transpose):
             col = 3 * J + j
             if row >= col and row - col <= BAND:
                 ab[row, row - col] += M[j, i] if transpose else M[i, j]
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _skew(v0, v1, v2, i, j):
-    """Entry (i, j) of the cross-product matrix [v] (so [v] u = v x u)."""
-    if i == 0:
-        return 0.0 if j == 0 else (-v2 if j == 1 else v1)
-    if i == 1:
-        return v2 if j == 0 else (0.0 if j == 1 else -v0)
-    return -v1 if j == 0 else (v0 if j == 1 else 0.0)
 
 
 @njit(cache=True, error_model="numpy")
@@ -119,30 +110,30 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
             for j in range(3):
                 M[i, j] = -K[i, j]
         _add_block(ab, by, bx, M, False)
-        # Node-rotation: H(x_b, phi) = Q^T (S [a] - [n]); H(x_a, phi) = -H(x_b, phi).
+        # Node-rotation: H(x_b, phi) = Q^T C with C = S [a] - [n]; H(x_a, phi) = -H(x_b, phi).
+        c01 = -Sk0 * a2 + n2_
+        c02 = Sk0 * a1 - n1_
+        c10 = Sk1 * a2 - n2_
+        c12 = -Sk1 * a0 + n0_
+        c20 = -Sk2 * a1 + n1_
+        c21 = Sk2 * a0 - n0_
         for i in range(3):
+            q0, q1, q2 = Q[e, 0, i], Q[e, 1, i], Q[e, 2, i]
+            M[i, 0] = q1 * c10 + q2 * c20
+            M[i, 1] = q0 * c01 + q2 * c21
+            M[i, 2] = q0 * c02 + q1 * c12
             for j in range(3):
-                s = 0.0
-                for m in range(3):
-                    Sm = Sk0 if m == 0 else (Sk1 if m == 1 else Sk2)
-                    s += Q[e, m, i] * (Sm * _skew(a0, a1, a2, m, j) - _skew(n0_, n1_, n2_, m, j))
-                M[i, j] = s
-                K[i, j] = -s
+                K[i, j] = -M[i, j]
         _add_block(ab, by, bphi, M, False)
         _add_block(ab, bx, bphi, K, False)
         # Rotation-rotation: l0 ([a]^T S [a] + sym(n a^T) - (n . a) I).
         na = n0_ * a0 + n1_ * a1 + n2_ * a2
-        for i in range(3):
-            ni = n0_ if i == 0 else (n1_ if i == 1 else n2_)
-            ai = a0 if i == 0 else (a1 if i == 1 else a2)
-            for j in range(3):
-                nj = n0_ if j == 0 else (n1_ if j == 1 else n2_)
-                aj = a0 if j == 0 else (a1 if j == 1 else a2)
-                s = 0.0
-                for m in range(3):
-                    Sm = Sk0 if m == 0 else (Sk1 if m == 1 else Sk2)
-                    s += _skew(a0, a1, a2, m, i) * Sm * _skew(a0, a1, a2, m, j)
-                K[i, j] = l0 * (s + 0.5 * (ni * aj + ai * nj) - (na if i == j else 0.0))
+        K[0, 0] = l0 * (Sk1 * a2 * a2 + Sk2 * a1 * a1 + n0_ * a0 - na)
+        K[1, 1] = l0 * (Sk0 * a2 * a2 + Sk2 * a0 * a0 + n1_ * a1 - na)
+        K[2, 2] = l0 * (Sk0 * a1 * a1 + Sk1 * a0 * a0 + n2_ * a2 - na)
+        K[0, 1] = K[1, 0] = l0 * (-Sk2 * a0 * a1 + 0.5 * (n0_ * a1 + a0 * n1_))
+        K[0, 2] = K[2, 0] = l0 * (-Sk1 * a0 * a2 + 0.5 * (n0_ * a2 + a0 * n2_))
+        K[1, 2] = K[2, 1] = l0 * (-Sk0 * a1 * a2 + 0.5 * (n1_ * a2 + a1 * n2_))
         _add_block(ab, bphi, bphi, K, False)
     # Bend / twist, Gauss-Newton: kappa ~ (phi_b - R phi_a) / rvl with R = Q_b Q_a^T.
     nv = ne if closed else ne - 1
@@ -298,6 +289,8 @@ def advance_rod_implicit(
     M = np.empty((3, 3))
     K = np.empty((3, 3))
     no_band = np.zeros((0, BAND + 1))
+    acc = np.zeros((nn, 3))  # predictor: h * (last step's acceleration), per node
+    alpha = np.zeros((ne, 3))  # and per element
     # Clamped unknowns: their values are prescribed, so their rows/columns drop out.
     for c in range(c0, c1):
         i = pcon_node[c] - n0
@@ -315,13 +308,20 @@ def advance_rod_implicit(
     done = 0  # full steps completed
     hs = h  # current sub-step (halved when Newton fails, back to h at each full step)
     elapsed = 0.0  # time done within the current full step
+    last_hs = 0.0  # size of the last accepted sub-step (0: no usable acceleration yet)
     while done < n_steps:
+        # The predictor extrapolates with the last step's acceleration: one Newton
+        # iteration fewer on smooth motion. vn still holds the previous step's start velocity.
+        extrapolate = hs if last_hs == hs else 0.0
         for i in range(n0, n0 + nn):
             for d in range(3):
+                accel_term = extrapolate * (vel[i, d] - vn[i, d])
                 xn[i, d] = pos[i, d]
                 vn[i, d] = vel[i, d]
+                acc[i - n0, d] = accel_term
         for e in range(e0, e0 + ne):
             for a in range(3):
+                alpha[e - e0, a] = extrapolate * (omega[e, a] - wn[e, a])
                 wn[e, a] = omega[e, a]
                 for b in range(3):
                     Qn[e, a, b] = Q[e, a, b]
@@ -337,12 +337,12 @@ def advance_rod_implicit(
             for e in range(e0, e0 + ne):
                 for d in range(3):
                     tn_el[e, d] = torque[e, d]
-        # Predictor: constant velocity.
         for i in range(n0, n0 + nn):
             for d in range(3):
-                pos[i, d] += hs * vel[i, d]
+                pos[i, d] += hs * (vel[i, d] + acc[i - n0, d])
         for e in range(e0, e0 + ne):
-            rotate_directors(Q, e, hs, omega[e, 0], omega[e, 1], omega[e, 2])
+            rotate_directors(Q, e, hs, omega[e, 0] + alpha[e - e0, 0], omega[e, 1] + alpha[e - e0, 1],
+                             omega[e, 2] + alpha[e - e0, 2])
         t_new = t + hs
         _constrain_values(t_new, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data)
 
@@ -351,6 +351,7 @@ def advance_rod_implicit(
         fail_at = -1
         it = 0
         update = 0.0
+        previous = math.inf
         while it < max_iter:
             it += 1
             # Velocities implied by the iterate.
@@ -395,9 +396,15 @@ def advance_rod_implicit(
             for q in range(ndof):
                 if fixed[q]:
                     rhs[q] = 0.0
-            # Newton matrix; if the stress terms make it indefinite, retry with Gauss-Newton.
-            bad = 1
+            # Newton matrix, refactored only when the last update did not shrink fast enough
+            # (chord iterations are ~3x cheaper); if the stress terms make it indefinite,
+            # retry with Gauss-Newton.
+            bad = 0
+            refactor = it == 1 or update > CHORD_RATE * previous
+            previous = update
             for geometric in (True, False):
+                if not refactor:
+                    break
                 _assemble(hs, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B,
                           rest_vor, mass, J, nu, kv, geometric, ab, M, K)
                 if planes.shape[0] > 0:
@@ -413,6 +420,7 @@ def advance_rod_implicit(
                 bad = band_cholesky(ab, ndof, BAND)
                 if bad == 0:
                     break
+                refactor = True
             if bad != 0:
                 failed = NOT_CONVERGED
                 fail_at = (bad - 1) // 6
@@ -446,6 +454,7 @@ def advance_rod_implicit(
                     omega[e, a] = wn[e, a]
                     for b in range(3):
                         Q[e, a, b] = Qn[e, a, b]
+            last_hs = 0.0
             if hs > h / MAX_REFINE:
                 hs *= 0.5
                 stats[r, 4] += 1
@@ -475,6 +484,7 @@ def advance_rod_implicit(
                 omega[e, d] = (Q[e, d, 0] * fcon_data[c, 0] + Q[e, d, 1] * fcon_data[c, 1]
                                + Q[e, d, 2] * fcon_data[c, 2])
         t = t_new
+        last_hs = hs
         stats[r, 1] += it
         if not converged:
             stats[r, 2] += 1
@@ -484,6 +494,8 @@ def advance_rod_implicit(
             done += 1
             stats[r, 0] += 1
             elapsed = 0.0
+            if hs != h:
+                last_hs = 0.0
             hs = h
     status[r, 2] = n_steps
     return t
