@@ -13,6 +13,7 @@ explicit position-Verlet integrator at the same ``dt`` in both engines.
 from __future__ import annotations
 
 import importlib.util
+import math
 import time
 from dataclasses import dataclass, field, replace
 
@@ -96,11 +97,11 @@ def _start(case: BenchCase, k: int) -> np.ndarray:
 # DeformX
 
 
-def build_deformx(case: BenchCase):
-    """Return ``(world, rods)`` for a case."""
+def build_deformx(case: BenchCase, integrator: str = "verlet", **world_options):
+    """Return ``(world, rods)`` for a case (``world_options`` go to :class:`World`)."""
     import deformx as dx
 
-    world = dx.World(gravity=case.gravity, dt=case.dt, integrator="verlet")
+    world = dx.World(gravity=case.gravity, dt=case.dt, integrator=integrator, **world_options)
     rods = []
     for k in range(case.n_rods):
         rod = dx.Rod.straight(n_elements=case.n_elements, start=tuple(_start(case, k)),
@@ -202,3 +203,165 @@ def run_cases(cases=None, n_steps: int | dict[str, int] = 2000, with_elastica: b
 def quick(case: BenchCase, **changes) -> BenchCase:
     """A copy of a case with some fields changed (e.g. ``quick(CASES['64x50'], n_rods=8)``)."""
     return replace(case, **changes)
+
+
+# ---------------------------------------------------------------------------------------------
+# Large steps: the stable (implicit) integrator against explicit steps at their stability limit.
+#
+# Speed is compared in wall-clock seconds per simulated second, so that an engine taking bigger
+# steps gets credit for them: ``seconds per step / dt``. Explicit engines are timed at their
+# largest stable ``dt``, found by :func:`largest_stable_dt` (geometric bisection on short runs).
+
+STABLE_CASES: dict[str, BenchCase] = {
+    "soft": BenchCase("soft", n_rods=1, n_elements=100, dt=1.0e-2,
+                      description="one clamped cantilever, 1 m, 100 elements, r=1 cm, E=1e6 Pa"),
+    "steel": BenchCase("steel", n_rods=1, n_elements=100, radius=1.0e-3, density=7850.0,
+                       youngs_modulus=2.0e11, dt=1.0e-2,
+                       description="steel wire, 1 m, 100 elements, r=1 mm, E=2e11 Pa"),
+    "256x20": BenchCase("256x20", n_rods=256, n_elements=20, dt=1.0e-2,
+                        description="256 clamped cantilevers in one world, 20 elements each, E=1e6 Pa"),
+}
+
+__all__ += ["STABLE_CASES", "StabilityResult", "explicit_dt_estimate", "stays_bounded_deformx",
+            "stays_bounded_elastica", "largest_stable_dt", "time_deformx_stable", "seconds_per_sim_second"]
+
+
+@dataclass
+class StabilityResult:
+    """Outcome of :func:`largest_stable_dt`: ``dt_max`` ran stably, ``dt_fail`` did not."""
+
+    dt_max: float
+    dt_fail: float
+    trials: int
+    seconds: float  # wall time spent searching
+
+
+def explicit_dt_estimate(case: BenchCase) -> float:
+    """DeformX's conservative explicit step for the case's rods (a start for the search)."""
+    from .engine.rod import explicit_time_step
+
+    shear = case.youngs_modulus / (2.0 * (1.0 + case.poisson_ratio))
+    return explicit_time_step(case.length / case.n_elements, case.radius, case.density,
+                              case.youngs_modulus, shear)
+
+
+def _trial_steps(dt: float, duration: float, max_steps: int) -> int:
+    return max(1, min(int(math.ceil(duration / dt)), max_steps))
+
+
+def _bounded(positions: np.ndarray, case: BenchCase) -> bool:
+    """Finite, and every node within ``2 L`` of where the rod starts (its clamp)."""
+    if not np.all(np.isfinite(positions)):
+        return False
+    return bool(np.max(np.linalg.norm(positions - _start(case, 0)[:, None], axis=0)) < 2.0 * case.length)
+
+
+def stays_bounded_deformx(case: BenchCase, dt: float, duration: float = 1.0, max_steps: int = 20000,
+                          check_every: int = 500, integrator: str = "verlet") -> bool:
+    """Run one rod of ``case`` for ``min(duration / dt, max_steps)`` steps of ``dt``: True if the
+    nodes stay finite and within ``2 L`` of the clamp and no :class:`SimulationDiverged` is raised.
+
+    The rods of a case are identical and do not interact, so one rod has the same limit as all.
+    The duration matters: a soft cantilever near its limit runs stably while straight and blows
+    up only once it bends (after 0.04 to 0.2 s for E = 1e6 Pa), so 1 s is the default.
+    """
+    from .errors import SimulationDiverged
+
+    one = replace(case, n_rods=1, dt=dt)
+    world, rods = build_deformx(one, integrator=integrator)
+    n = _trial_steps(dt, duration, max_steps)
+    done = 0
+    try:
+        while done < n:
+            k = min(check_every, n - done)
+            world.step(k)
+            done += k
+            if not _bounded(rods[0].positions.T, one):
+                return False
+    except SimulationDiverged:
+        return False
+    return True
+
+
+def stays_bounded_elastica(case: BenchCase, dt: float, duration: float = 1.0, max_steps: int = 20000,
+                           check_every: int = 500) -> bool:
+    """As :func:`stays_bounded_deformx`, for PyElastica's position Verlet (damper built for ``dt``)."""
+    import warnings
+
+    one = replace(case, n_rods=1, dt=dt)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sim, stepper, rods = build_elastica(one)
+        n = _trial_steps(dt, duration, max_steps)
+        t = np.float64(0.0)
+        h = np.float64(dt)
+        done = 0
+        with np.errstate(all="ignore"):
+            while done < n:
+                k = min(check_every, n - done)
+                for _ in range(k):
+                    t = stepper.step(sim, t, h)
+                done += k
+                if not _bounded(np.asarray(rods[0].position_collection), one):
+                    return False
+    return True
+
+
+def largest_stable_dt(is_stable, dt0: float, rel_tol: float = 0.05, max_trials: int = 40) -> StabilityResult:
+    """Largest ``dt`` with ``is_stable(dt)`` True, by geometric bisection.
+
+    From ``dt0`` the step is doubled (or halved) until the outcome changes, then the bracket
+    ``[stable, unstable]`` is split at its geometric mean until ``unstable / stable <= 1 + rel_tol``.
+    """
+    t0 = time.perf_counter()
+    trials = 1
+    if is_stable(dt0):
+        lo, hi = dt0, None
+        while hi is None:
+            if trials >= max_trials:
+                raise RuntimeError(f"still stable at dt = {lo:g} after {trials} trials")
+            trials += 1
+            if is_stable(2.0 * lo):
+                lo = 2.0 * lo
+            else:
+                hi = 2.0 * lo
+    else:
+        lo, hi = None, dt0
+        while lo is None:
+            if trials >= max_trials:
+                raise RuntimeError(f"still unstable at dt = {hi:g} after {trials} trials")
+            trials += 1
+            if is_stable(0.5 * hi):
+                lo = 0.5 * hi
+            else:
+                hi = 0.5 * hi
+    while hi / lo > 1.0 + rel_tol and trials < max_trials:
+        mid = math.sqrt(lo * hi)
+        if is_stable(mid):
+            lo = mid
+        else:
+            hi = mid
+        trials += 1
+    return StabilityResult(lo, hi, trials, time.perf_counter() - t0)
+
+
+def seconds_per_sim_second(result: BenchResult) -> float:
+    """Wall-clock seconds per simulated second of a timing: ``seconds per step / dt``."""
+    return result.seconds_per_step / result.case.dt
+
+
+def time_deformx_stable(case: BenchCase, n_steps: int = 100, warmup_steps: int = 1,
+                        **world_options) -> tuple[BenchResult, dict]:
+    """Seconds for ``n_steps`` steps of ``integrator="stable"`` at ``case.dt``, from rest after a
+    warm-up (which includes any numba compile), and the world's :meth:`~World.solver_stats`
+    (warm-up included). ``world_options`` (``iterations``, ``tolerance``, ...) go to
+    :class:`World`; left out, its defaults apply."""
+    t0 = time.perf_counter()
+    world, rods = build_deformx(case, integrator="stable", **world_options)
+    world.step(warmup_steps)
+    setup = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    world.step(n_steps)
+    seconds = time.perf_counter() - t0
+    result = BenchResult(case, "deformx-stable", n_steps, seconds, setup, rods[0].positions[-1].copy())
+    return result, world.solver_stats()
