@@ -12,6 +12,7 @@ from typing import Sequence
 import numpy as np
 
 GHOST_NODES, GHOST_ELEMENTS, GHOST_VORONOI = 1, 2, 3
+CONTACT_STIFFNESS_FLOOR = 0.01  # automatic plane stiffness >= this times EA / dl
 
 
 class Block:
@@ -36,6 +37,9 @@ class Block:
         self.vel = np.zeros((N, 3))
         self.mass = np.ones(N)
         self.node_radius = np.zeros(N)
+        # Floor of the automatic contact stiffness (N/m): 1 % of the adjacent elements' axial
+        # stiffness, so a stiff rod pressing on a plane does not sink into it.
+        self.node_kmin = np.zeros(N)
         self.fext = np.zeros((N, 3))
         self.force = np.zeros((N, 3))
         self.contact_force = np.zeros((N, 3))
@@ -64,7 +68,11 @@ class Block:
         self.tn_el = np.zeros((E, 3))
         self.anchor = np.zeros((N, 3))
         self.anchor_on = np.zeros(N, dtype=np.int64)
+        self.c_plane = np.full(N, -1, dtype=np.int64)
+        self.c_stick = np.zeros(N, dtype=np.int64)
+        self.c_dir = np.zeros((N, 3))
         self.stats = np.zeros((R, 5))
+        self.h_prev = np.zeros(R)  # last accepted (sub-)step per rod: the predictor's memory
 
         self.B = np.zeros((V, 3))
         self.rest_vor = np.ones(V)
@@ -83,6 +91,11 @@ class Block:
             self.elem_rod[e] = i
             self.mass[n] = rod.masses
             self.node_radius[n] = rod.node_radius
+            axial = rod._shear_matrix[:, 2] / rod.rest_lengths
+            kmin = np.zeros(nn[i])
+            kmin[: rod.n_elements] = axial
+            kmin[1:] = np.maximum(kmin[1:], axial[: nn[i] - 1])
+            self.node_kmin[n] = CONTACT_STIFFNESS_FLOOR * kmin
             self.J[e] = rod._inertia
             self.inv_J[e] = 1.0 / rod._inertia
             self.S[e] = rod._shear_matrix

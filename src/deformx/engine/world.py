@@ -53,7 +53,7 @@ _REASONS = {
     verlet.NOT_FINITE: "a position, frame or load became NaN/inf",
     verlet.RUNAWAY_STRETCH: "runaway stretch (element strain beyond max_strain)",
     verlet.RUNAWAY_BEND: "runaway bending/twist (neighbouring frames turned by > 170 degrees)",
-    implicit.NOT_CONVERGED: "the Newton matrix lost positive definiteness",
+    implicit.NOT_CONVERGED: "Newton's method did not converge even on dt/64 sub-steps",
 }
 
 
@@ -189,7 +189,7 @@ class World:
         self._groups = _balanced_groups(b.rod_ne, self.threads)
         common = (
             self._rod_pcon, self._rod_fcon,
-            b.pos, b.vel, b.mass, b.node_radius, b.fext, b.force, b.contact_force)
+            b.pos, b.vel, b.mass, b.node_radius, b.node_kmin, b.fext, b.force, b.contact_force)
         if self.integrator == "verlet":
             viscous = [i for i, r in enumerate(self._rods) if r.internal_damping > 0.0]
             if viscous:
@@ -217,7 +217,8 @@ class World:
                 b.scr_lab, b.scr_C, b.scr_X, b.scr_edot, b.scr_vdil,
                 self._pcon_node, self._pcon_data, self._fcon_elem, self._fcon_Q0, self._fcon_data,
                 self._planes_arr, self._status, self._times,
-                b.xn, b.vn, b.Qn, b.wn, b.fn_el, b.tn_el, b.anchor, b.anchor_on, b.stats)
+                b.xn, b.vn, b.Qn, b.wn, b.fn_el, b.tn_el, b.anchor, b.anchor_on, b.c_plane,
+                b.c_stick, b.c_dir, b.stats, b.h_prev)
         self._dirty = False
 
     def step(self, n_steps: int = 1) -> None:

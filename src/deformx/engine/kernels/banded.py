@@ -1,7 +1,9 @@
-"""Banded symmetric positive definite systems (Cholesky in lower band storage).
+"""Block-banded symmetric positive definite systems with 3x3 blocks (block Cholesky).
 
-``ab[i, k]`` holds ``A[i, i - k]`` for ``k = 0 .. p``: row-major lower band, so one rod's
-block-pentadiagonal Newton matrix factors in O(n p^2) without fill-in.
+One rod's Newton matrix in the order x0, phi0, x1, phi1, ... couples blocks at most two apart.
+``A[I, d]`` holds the 3x3 block (I, I - d) for d = 0, 1, 2 (diagonal blocks in full). The
+factorisation runs in O(n) with fixed-size 3x3 kernels; afterwards ``A[I, 0]`` holds the inverse
+of the diagonal Cholesky block, so both triangular sweeps only multiply.
 """
 
 from __future__ import annotations
@@ -10,38 +12,102 @@ import math
 
 from numba import njit
 
+BLOCK_BAND = 2  # coupled blocks are at most this many apart
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _chol3_inverse(A, I) -> bool:
+    """Replace the SPD block A[I, 0] by the inverse of its lower Cholesky factor."""
+    a00 = A[I, 0, 0, 0]
+    if not (a00 > 0.0):
+        return False
+    l00 = math.sqrt(a00)
+    l10 = A[I, 0, 1, 0] / l00
+    l20 = A[I, 0, 2, 0] / l00
+    a11 = A[I, 0, 1, 1] - l10 * l10
+    if not (a11 > 0.0):
+        return False
+    l11 = math.sqrt(a11)
+    l21 = (A[I, 0, 2, 1] - l20 * l10) / l11
+    a22 = A[I, 0, 2, 2] - l20 * l20 - l21 * l21
+    if not (a22 > 0.0):
+        return False
+    l22 = math.sqrt(a22)
+    i00 = 1.0 / l00
+    i11 = 1.0 / l11
+    i22 = 1.0 / l22
+    i10 = -l10 * i00 * i11
+    i21 = -l21 * i11 * i22
+    i20 = -(l20 * i00 + l21 * i10) * i22
+    A[I, 0, 0, 0] = i00
+    A[I, 0, 0, 1] = 0.0
+    A[I, 0, 0, 2] = 0.0
+    A[I, 0, 1, 0] = i10
+    A[I, 0, 1, 1] = i11
+    A[I, 0, 1, 2] = 0.0
+    A[I, 0, 2, 0] = i20
+    A[I, 0, 2, 1] = i21
+    A[I, 0, 2, 2] = i22
+    return True
+
 
 @njit(cache=True, error_model="numpy")
-def band_cholesky(ab, n, p) -> int:
-    """In-place Cholesky ``A = L L^T`` of the leading ``n`` rows; returns 0 or the 1-based row
-    of the first non-positive pivot (then the factor is unusable)."""
-    for i in range(n):
-        jmin = max(0, i - p)
-        for j in range(jmin, i + 1):
-            # s = A[i, j] - sum_k L[i, k] L[j, k]
-            s = ab[i, i - j]
-            kmin = max(jmin, j - p)
-            for k in range(kmin, j):
-                s -= ab[i, i - k] * ab[j, j - k]
-            if j == i:
-                if not (s > 0.0):
-                    return i + 1
-                ab[i, 0] = math.sqrt(s)
-            else:
-                ab[i, i - j] = s / ab[j, 0]
+def block_cholesky(A, nb) -> int:
+    """In-place block Cholesky of the first ``nb`` block rows; 0, or 1 + the first block row
+    whose pivot block is not positive definite."""
+    for I in range(nb):
+        for d in range(min(I, BLOCK_BAND), -1, -1):
+            J = I - d
+            # S = A_IJ - sum_K L_IK L_JK^T over K < J within both bands
+            for K in range(max(I - BLOCK_BAND, J - BLOCK_BAND, 0), J):
+                dI = I - K
+                dJ = J - K
+                for a in range(3):
+                    for b in range(3):
+                        s = 0.0
+                        for c in range(3):
+                            s += A[I, dI, a, c] * A[J, dJ, b, c]
+                        A[I, d, a, b] -= s
+            if d > 0:
+                # L_IJ = S L_JJ^-T, with A[J, 0] = L_JJ^-1 (lower triangular)
+                for a in range(3):
+                    s0 = A[I, d, a, 0]
+                    s1 = A[I, d, a, 1]
+                    s2 = A[I, d, a, 2]
+                    for b in range(3):
+                        A[I, d, a, b] = (s0 * A[J, 0, b, 0] + s1 * A[J, 0, b, 1]
+                                         + s2 * A[J, 0, b, 2])
+            elif not _chol3_inverse(A, I):
+                return I + 1
     return 0
 
 
 @njit(cache=True, error_model="numpy")
-def band_solve(ab, n, p, b) -> None:
-    """Solve ``L L^T x = b`` in place with the factor from :func:`band_cholesky`."""
-    for i in range(n):
-        s = b[i]
-        for k in range(max(0, i - p), i):
-            s -= ab[i, i - k] * b[k]
-        b[i] = s / ab[i, 0]
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for k in range(i + 1, min(n, i + p + 1)):
-            s -= ab[k, k - i] * b[k]
-        b[i] = s / ab[i, 0]
+def block_solve(A, nb, x) -> None:
+    """Solve ``L L^T x = b`` in place (``x`` holds b, shape (nb, 3)) with the block factor."""
+    for I in range(nb):
+        r0 = x[I, 0]
+        r1 = x[I, 1]
+        r2 = x[I, 2]
+        for K in range(max(I - BLOCK_BAND, 0), I):
+            d = I - K
+            r0 -= A[I, d, 0, 0] * x[K, 0] + A[I, d, 0, 1] * x[K, 1] + A[I, d, 0, 2] * x[K, 2]
+            r1 -= A[I, d, 1, 0] * x[K, 0] + A[I, d, 1, 1] * x[K, 1] + A[I, d, 1, 2] * x[K, 2]
+            r2 -= A[I, d, 2, 0] * x[K, 0] + A[I, d, 2, 1] * x[K, 1] + A[I, d, 2, 2] * x[K, 2]
+        x[I, 0] = A[I, 0, 0, 0] * r0
+        x[I, 1] = A[I, 0, 1, 0] * r0 + A[I, 0, 1, 1] * r1
+        x[I, 2] = A[I, 0, 2, 0] * r0 + A[I, 0, 2, 1] * r1 + A[I, 0, 2, 2] * r2
+    for I in range(nb - 1, -1, -1):
+        r0 = x[I, 0]
+        r1 = x[I, 1]
+        r2 = x[I, 2]
+        for K in range(I + 1, min(I + BLOCK_BAND + 1, nb)):
+            d = K - I
+            # subtract L_KI^T x_K
+            r0 -= A[K, d, 0, 0] * x[K, 0] + A[K, d, 1, 0] * x[K, 1] + A[K, d, 2, 0] * x[K, 2]
+            r1 -= A[K, d, 0, 1] * x[K, 0] + A[K, d, 1, 1] * x[K, 1] + A[K, d, 2, 1] * x[K, 2]
+            r2 -= A[K, d, 0, 2] * x[K, 0] + A[K, d, 1, 2] * x[K, 1] + A[K, d, 2, 2] * x[K, 2]
+        # x_I = L_II^-T r
+        x[I, 0] = A[I, 0, 0, 0] * r0 + A[I, 0, 1, 0] * r1 + A[I, 0, 2, 0] * r2
+        x[I, 1] = A[I, 0, 1, 1] * r1 + A[I, 0, 2, 1] * r2
+        x[I, 2] = A[I, 0, 2, 2] * r2

@@ -14,8 +14,10 @@ factors by banded Cholesky in O(n). Every stiff term is implicit, so the step is
 stiffness; the numerical damping is backward Euler's: a mode of angular frequency w keeps
 1/sqrt(1 + (w h)^2) of its amplitude per step.
 
-Contact friction is an elastic stick spring anchored where the node touched down: a static load
-below mu_s N holds exactly (bounded elastic shift F/k, no creep), and sliding costs mu_k N.
+Contact is solved with an active set: within a Newton solve the touching nodes and their
+stick/slip states are fixed (smooth equations), then corrected and re-solved. Friction is an
+elastic stick spring anchored where the node touched down: a static load below mu_s N holds
+exactly (bounded elastic shift F/k, no creep), and sliding costs mu_k N.
 """
 
 from __future__ import annotations
@@ -25,13 +27,12 @@ import math
 import numpy as np
 from numba import njit
 
-from .banded import band_cholesky, band_solve
+from .banded import BLOCK_BAND, block_cholesky, block_solve
 from .cosserat import rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
 from .verlet import OK, _check, _constrain_values
 
-BAND = 8  # scalar half bandwidth: coupled 3x3 blocks are at most two blocks apart
-NOT_CONVERGED = 4  # status code: Newton failed even on a tiny fraction of the step
+NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-steps
 # per rod: steps, Newton iterations, sub-steps at the iteration cap, last relative update,
 # step halvings
 N_STATS = 5
@@ -41,28 +42,28 @@ MAX_REFINE = 64.0  # a step is halved at most down to dt / MAX_REFINE before giv
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _add_block(ab, I, J, M, transpose):
+def _add_block(A, I, J, M, transpose):
     """Add the 3x3 block ``M`` (or ``M^T``) at block row ``I``, block column ``J``.
 
-    Blocks above the diagonal are stored as their transposes below it; entries that fall
-    outside the band (the wrap-around coupling of a closed rod) are left out of the matrix,
-    which then is an approximate Newton matrix for that rod.
+    Blocks above the diagonal are stored as their transposes below it; a block farther from
+    the diagonal than the band (the wrap-around coupling of a closed rod) is left out, which
+    makes the matrix an approximate Newton matrix for that rod.
     """
     if I < J:
         I, J = J, I
         transpose = not transpose
+    d = I - J
+    if d > BLOCK_BAND:
+        return
     for i in range(3):
         for j in range(3):
-            row = 3 * I + i
-            col = 3 * J + j
-            if row >= col and row - col <= BAND:
-                ab[row, row - col] += M[j, i] if transpose else M[i, j]
+            A[I, d, i, j] += M[j, i] if transpose else M[i, j]
 
 
 @njit(cache=True, error_model="numpy")
 def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B, rest_vor,
-              mass, J, nu, kv, geometric, ab, M, K):
-    """Newton matrix of one rod into ``ab`` (lower band); returns the number of unknowns.
+              mass, J, nu, kv, geometric, A, M, K):
+    """Newton matrix of one rod into ``A`` (block band); returns the number of block rows.
 
     ``kv`` = 1 + (Kelvin-Voigt retardation time) / h scales the elastic stiffness. The stress
     (geometric) terms are added for elements in tension only, and only with ``geometric``:
@@ -70,13 +71,11 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
     positive definite by construction.
     """
     nb = 2 * ne + (0 if closed else 1)
-    for i in range(3 * nb):
-        for k in range(BAND + 1):
-            ab[i, k] = 0.0
+    A[:nb] = 0.0
     for i in range(nn):
         c = mass[n0 + i] * (1.0 / (h * h) + nu / h)
         for d in range(3):
-            ab[6 * i + d, 0] += c
+            A[2 * i, 0, d, d] += c
     for k in range(ne):
         e = e0 + k
         ia = n0 + k
@@ -86,7 +85,7 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
         by = 2 * k + 2 if k + 1 < nn else 0
         c = (1.0 / (h * h) + nu / h) / dil[e]
         for d in range(3):
-            ab[3 * bphi + d, 0] += J[e, d] * c
+            A[bphi, 0, d, d] += J[e, d] * c
         l0 = rest_len[e]
         # a = Q dx / l0 (stretch times material tangent), n = material stress.
         dx0 = pos[ib, 0] - pos[ia, 0]
@@ -104,12 +103,12 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
             for j in range(3):
                 K[i, j] = (Q[e, 0, i] * Sk0 * Q[e, 0, j] + Q[e, 1, i] * Sk1 * Q[e, 1, j]
                            + Q[e, 2, i] * Sk2 * Q[e, 2, j]) / l0
-        _add_block(ab, bx, bx, K, False)
-        _add_block(ab, by, by, K, False)
+        _add_block(A, bx, bx, K, False)
+        _add_block(A, by, by, K, False)
         for i in range(3):
             for j in range(3):
                 M[i, j] = -K[i, j]
-        _add_block(ab, by, bx, M, False)
+        _add_block(A, by, bx, M, False)
         # Node-rotation: H(x_b, phi) = Q^T C with C = S [a] - [n]; H(x_a, phi) = -H(x_b, phi).
         c01 = -Sk0 * a2 + n2_
         c02 = Sk0 * a1 - n1_
@@ -124,8 +123,8 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
             M[i, 2] = q0 * c02 + q1 * c12
             for j in range(3):
                 K[i, j] = -M[i, j]
-        _add_block(ab, by, bphi, M, False)
-        _add_block(ab, bx, bphi, K, False)
+        _add_block(A, by, bphi, M, False)
+        _add_block(A, bx, bphi, K, False)
         # Rotation-rotation: l0 ([a]^T S [a] + sym(n a^T) - (n . a) I).
         na = n0_ * a0 + n1_ * a1 + n2_ * a2
         K[0, 0] = l0 * (Sk1 * a2 * a2 + Sk2 * a1 * a1 + n0_ * a0 - na)
@@ -134,7 +133,7 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
         K[0, 1] = K[1, 0] = l0 * (-Sk2 * a0 * a1 + 0.5 * (n0_ * a1 + a0 * n1_))
         K[0, 2] = K[2, 0] = l0 * (-Sk1 * a0 * a2 + 0.5 * (n0_ * a2 + a0 * n2_))
         K[1, 2] = K[2, 1] = l0 * (-Sk0 * a1 * a2 + 0.5 * (n1_ * a2 + a1 * n2_))
-        _add_block(ab, bphi, bphi, K, False)
+        _add_block(A, bphi, bphi, K, False)
     # Bend / twist, Gauss-Newton: kappa ~ (phi_b - R phi_a) / rvl with R = Q_b Q_a^T.
     nv = ne if closed else ne - 1
     for j in range(nv):
@@ -152,116 +151,175 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
                            + M[2, i] * B[vj, 2] * M[2, m]) * inv
         ba = 2 * j + 1
         bb = 2 * (j + 1) + 1 if j + 1 < ne else 1
-        _add_block(ab, ba, ba, K, False)
+        _add_block(A, ba, ba, K, False)
         for i in range(3):
             for m in range(3):
                 K[i, m] = B[vj, i] * inv if i == m else 0.0
-        _add_block(ab, bb, bb, K, False)
+        _add_block(A, bb, bb, K, False)
         for i in range(3):
             for m in range(3):
                 K[i, m] = -B[vj, i] * M[i, m] * inv
-        _add_block(ab, bb, ba, K, False)
-    return 3 * nb
+        _add_block(A, bb, ba, K, False)
+    return nb
+
+
+# Phases of the active-set contact treatment (see _contacts).
+PREDICT, ITERATE, CHECK, FINISH = 0, 1, 2, 3
+MAX_SET_ROUNDS = 4  # contact-set corrections per step before the set is frozen
+STICK_MARGIN = 0.99  # a sliding node's anchor trails at this fraction of the kinetic limit
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _plane_gap(planes, p, pos, g, radius):
+    return ((pos[g, 0] - planes[p, 0]) * planes[p, 3] + (pos[g, 1] - planes[p, 1]) * planes[p, 4]
+            + (pos[g, 2] - planes[p, 2]) * planes[p, 5] - radius)
 
 
 @njit(cache=True, error_model="numpy")
-def _contacts(n0, nn, h, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on, force,
-              contact_force, ab, finalize, add_forces):
-    """Implicit plane contact on one rod: forces into ``force``, stiffness onto the diagonal.
+def _contacts(phase, n0, nn, h, planes, pos, xn, mass, node_radius, node_kmin, anchor, anchor_on,
+              c_plane, c_stick, c_dir, force, contact_force, A, add_forces) -> int:
+    """Implicit plane contact of one rod with a fixed active set per Newton solve.
 
-    Normal: penalty ``k d - c v_n``. Tangential: a stick spring of stiffness k from the anchor,
-    capped at mu_s N (stick) and otherwise sliding at mu_k N. With ``finalize`` the anchors of
-    sliding nodes are moved along (end of step).
+    Normal force ``-k gap - c v_n``. A sticking node is held by a spring of stiffness k to its
+    anchor (where it touched down); a sliding node feels kinetic friction ``mu_k N`` against
+    its sliding direction ``c_dir``, fixed during the solve. Within a solve the touching nodes
+    and their stick/slip states stay fixed, so the equations are smooth and Newton converges;
+    ``CHECK`` then corrects the states (release on separation; stick -> slip when the spring
+    force exceeds ``mu_s N``; slip -> stick when the sliding velocity reverses) and returns
+    the number of corrections.
+
+    phase PREDICT: choose the set at the predictor; ITERATE: add forces (``add_forces``) or
+    stiffness (into ``A``); CHECK: correct the set; FINISH: store contact forces and anchors.
     """
+    changes = 0
     for i in range(nn):
         g = n0 + i
-        contact_force[g, 0] = 0.0
-        contact_force[g, 1] = 0.0
-        contact_force[g, 2] = 0.0
-        touching = False
-        for p in range(planes.shape[0]):
-            nx, ny, nz = planes[p, 3], planes[p, 4], planes[p, 5]
-            gap = ((pos[g, 0] - planes[p, 0]) * nx + (pos[g, 1] - planes[p, 1]) * ny
-                   + (pos[g, 2] - planes[p, 2]) * nz - node_radius[g])
-            if gap >= 0.0:
+        if phase == PREDICT or phase == CHECK:
+            best = 0.0
+            best_p = -1
+            for p in range(planes.shape[0]):
+                gap = _plane_gap(planes, p, pos, g, node_radius[g])
+                if gap < best:
+                    best = gap
+                    best_p = p
+            if phase == PREDICT:
+                c_plane[g] = best_p
+                if best_p >= 0 and anchor_on[g] == 0:
+                    c_stick[g] = 1
+                    for d in range(3):
+                        anchor[g, d] = xn[g, d]
                 continue
-            touching = True
-            k = planes[p, 6]
-            c = planes[p, 7]
-            if planes[p, 10] > 0.0:
-                k = mass[g] * (0.2 / min(h, 1e-4)) ** 2
-            if c < 0.0:
-                c = 2.0 * math.sqrt(k * mass[g])
-            vn = vel[g, 0] * nx + vel[g, 1] * ny + vel[g, 2] * nz
-            fn = -k * gap - c * vn
-            knn = k + c / h
-            if fn <= 0.0:
-                fn = 0.0
-                knn = 0.0
-            f0, f1, f2 = fn * nx, fn * ny, fn * nz
-            # Tangential: spring from the anchor (the touch-down point if new).
-            if anchor_on[g] == 0:
+            if c_plane[g] < 0:
+                if best_p >= 0:  # a new contact
+                    c_plane[g] = best_p
+                    c_stick[g] = 1
+                    if anchor_on[g] == 0:
+                        for d in range(3):
+                            anchor[g, d] = xn[g, d]
+                    changes += 1
+                continue
+        if c_plane[g] < 0:
+            if phase == FINISH:
+                anchor_on[g] = 0
+            if phase == FINISH or (phase == ITERATE and add_forces):
+                contact_force[g, 0] = 0.0
+                contact_force[g, 1] = 0.0
+                contact_force[g, 2] = 0.0
+            continue
+        p = c_plane[g]
+        nx, ny, nz = planes[p, 3], planes[p, 4], planes[p, 5]
+        gap = _plane_gap(planes, p, pos, g, node_radius[g])
+        k = planes[p, 6]
+        c = planes[p, 7]
+        if planes[p, 10] > 0.0:
+            k = max(mass[g] * (0.2 / min(h, 1e-4)) ** 2, node_kmin[g])
+        if c < 0.0:
+            c = 2.0 * math.sqrt(k * mass[g])
+        u0 = pos[g, 0] - xn[g, 0]
+        u1 = pos[g, 1] - xn[g, 1]
+        u2 = pos[g, 2] - xn[g, 2]
+        un = u0 * nx + u1 * ny + u2 * nz
+        fn = -k * gap - c * un / h
+        n_force = max(fn, 0.0)
+        mu_s, mu_k = planes[p, 8], planes[p, 9]
+        # Spring stretch from the anchor, in the tangent plane.
+        d0 = pos[g, 0] - anchor[g, 0]
+        d1 = pos[g, 1] - anchor[g, 1]
+        d2 = pos[g, 2] - anchor[g, 2]
+        dn = d0 * nx + d1 * ny + d2 * nz
+        d0 -= dn * nx
+        d1 -= dn * ny
+        d2 -= dn * nz
+        dmag = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        if phase == CHECK:
+            if gap > 0.0:  # separated (the damper may pull briefly while it leaves)
+                c_plane[g] = -1
+                changes += 1
+            elif c_stick[g] == 1:
+                if k * dmag > mu_s * n_force and dmag > 0.0:
+                    c_stick[g] = 0
+                    c_dir[g, 0] = d0 / dmag
+                    c_dir[g, 1] = d1 / dmag
+                    c_dir[g, 2] = d2 / dmag
+                    changes += 1
+            elif u0 * c_dir[g, 0] + u1 * c_dir[g, 1] + u2 * c_dir[g, 2] <= 0.0:
+                # The sliding velocity reversed: it stops and sticks, spring pre-loaded so
+                # that the friction force is continuous.
+                c_stick[g] = 1
+                back = mu_k * n_force / k
                 for d in range(3):
-                    anchor[g, d] = xn[g, d]
-                anchor_on[g] = 1
-            d0 = pos[g, 0] - anchor[g, 0]
-            d1 = pos[g, 1] - anchor[g, 1]
-            d2 = pos[g, 2] - anchor[g, 2]
-            dn = d0 * nx + d1 * ny + d2 * nz
-            d0 -= dn * nx
-            d1 -= dn * ny
-            d2 -= dn * nz
-            dmag = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-            mu_s, mu_k = planes[p, 8], planes[p, 9]
-            kt_iso = 0.0  # stiffness on the tangent plane
-            kt_dir = 0.0  # stiffness removed along the sliding direction
-            if k * dmag <= mu_s * fn:
-                f0 -= k * d0
-                f1 -= k * d1
-                f2 -= k * d2
-                kt_iso = k
-            else:
-                ft = mu_k * fn
-                f0 -= ft * d0 / dmag
-                f1 -= ft * d1 / dmag
-                f2 -= ft * d2 / dmag
-                kt_iso = ft / dmag
-                kt_dir = kt_iso
-                if finalize:
-                    back = ft / (k * dmag)
-                    anchor[g, 0] = pos[g, 0] - back * d0
-                    anchor[g, 1] = pos[g, 1] - back * d1
-                    anchor[g, 2] = pos[g, 2] - back * d2
-            if add_forces:
-                force[g, 0] += f0
-                force[g, 1] += f1
-                force[g, 2] += f2
-            contact_force[g, 0] += f0
-            contact_force[g, 1] += f1
-            contact_force[g, 2] += f2
-            if ab.shape[0] > 0:
-                nv = (nx, ny, nz)
-                dv = (d0 / (dmag + 1e-300), d1 / (dmag + 1e-300), d2 / (dmag + 1e-300))
-                for a in range(3):
-                    for b in range(a + 1):
-                        kab = (knn - kt_iso) * nv[a] * nv[b] - kt_dir * dv[a] * dv[b]
-                        if a == b:
-                            kab += kt_iso
-                        ab[6 * i + a, a - b] += kab
-        if not touching:
-            anchor_on[g] = 0
+                    anchor[g, d] = pos[g, d] - back * c_dir[g, d]
+                changes += 1
+            continue
+        if c_stick[g] == 1:
+            f0 = n_force * nx - k * d0
+            f1 = n_force * ny - k * d1
+            f2 = n_force * nz - k * d2
+        else:
+            f0 = n_force * nx - mu_k * n_force * c_dir[g, 0]
+            f1 = n_force * ny - mu_k * n_force * c_dir[g, 1]
+            f2 = n_force * nz - mu_k * n_force * c_dir[g, 2]
+        if phase == FINISH:
+            anchor_on[g] = 1
+            if c_stick[g] == 0:
+                # Keep the anchor trailing just inside the kinetic limit for a later stick.
+                back = STICK_MARGIN * mu_k * n_force / k
+                for d in range(3):
+                    anchor[g, d] = pos[g, d] - back * c_dir[g, d]
+            contact_force[g, 0] = f0
+            contact_force[g, 1] = f1
+            contact_force[g, 2] = f2
+            continue
+        if add_forces:
+            force[g, 0] += f0
+            force[g, 1] += f1
+            force[g, 2] += f2
+            contact_force[g, 0] = f0
+            contact_force[g, 1] = f1
+            contact_force[g, 2] = f2
+        else:
+            knn = k + c / h
+            kt = k if c_stick[g] == 1 else 0.0
+            nv = (nx, ny, nz)
+            for a in range(3):
+                for b in range(3):
+                    kab = (knn - kt) * nv[a] * nv[b]
+                    if a == b:
+                        kab += kt
+                    A[2 * i, 0, a, b] += kab
+    return changes
 
 
 @njit(cache=True, error_model="numpy")
 def advance_rod_implicit(
     r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
     rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_tau, rod_pcon, rod_fcon,
-    pos, vel, mass, node_radius, fext, force, contact_force,
+    pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, stats,
+    planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev,
 ):
     """Advance rod ``r`` by ``n_steps`` backward-Euler steps of ``dt``; returns the new time.
 
@@ -282,24 +340,20 @@ def advance_rod_implicit(
     nu = rod_nu[r]
     tau = rod_tau[r]
     nb = 2 * ne + (0 if closed else 1)
-    ndof = 3 * nb
-    ab = np.zeros((ndof, BAND + 1))
-    rhs = np.zeros(ndof)
-    fixed = np.zeros(ndof, dtype=np.bool_)
+    A = np.zeros((nb, BLOCK_BAND + 1, 3, 3))
+    rhs = np.zeros((nb, 3))
+    fixed = np.zeros(nb, dtype=np.bool_)
     M = np.empty((3, 3))
     K = np.empty((3, 3))
-    no_band = np.zeros((0, BAND + 1))
+    no_band = np.zeros((0, BLOCK_BAND + 1, 3, 3))
+    has_planes = planes.shape[0] > 0
     acc = np.zeros((nn, 3))  # predictor: h * (last step's acceleration), per node
     alpha = np.zeros((ne, 3))  # and per element
     # Clamped unknowns: their values are prescribed, so their rows/columns drop out.
     for c in range(c0, c1):
-        i = pcon_node[c] - n0
-        for d in range(3):
-            fixed[6 * i + d] = True
+        fixed[2 * (pcon_node[c] - n0)] = True
     for c in range(f0, f1):
-        k = fcon_elem[c] - e0
-        for d in range(3):
-            fixed[3 * (2 * k + 1) + d] = True
+        fixed[2 * (fcon_elem[c] - e0) + 1] = True
     length_scale = 0.0
     for k in range(ne):
         length_scale += rest_len[e0 + k]
@@ -308,7 +362,7 @@ def advance_rod_implicit(
     done = 0  # full steps completed
     hs = h  # current sub-step (halved when Newton fails, back to h at each full step)
     elapsed = 0.0  # time done within the current full step
-    last_hs = 0.0  # size of the last accepted sub-step (0: no usable acceleration yet)
+    last_hs = h_prev[r]  # last accepted sub-step (0: no usable acceleration yet)
     while done < n_steps:
         # The predictor extrapolates with the last step's acceleration: one Newton
         # iteration fewer on smooth motion. vn still holds the previous step's start velocity.
@@ -345,6 +399,13 @@ def advance_rod_implicit(
                              omega[e, 2] + alpha[e - e0, 2])
         t_new = t + hs
         _constrain_values(t_new, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data)
+        if has_planes:
+            _contacts(PREDICT, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
+                      anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)
+        set_rounds = 0
+        budget = max_iter
+        step_scale = 1.0
+        last_update = math.inf
 
         converged = False
         failed = OK
@@ -352,7 +413,7 @@ def advance_rod_implicit(
         it = 0
         update = 0.0
         previous = math.inf
-        while it < max_iter:
+        while it < budget:
             it += 1
             # Velocities implied by the iterate.
             for i in range(n0, n0 + nn):
@@ -380,22 +441,24 @@ def advance_rod_implicit(
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     force[i, d] += mass[i] * gravity[d] + fext[i, d]
-            if planes.shape[0] > 0:
-                _contacts(n0, nn, hs, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on,
-                          force, contact_force, no_band, False, True)
+            if has_planes:
+                _contacts(ITERATE, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
+                          anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, True)
             # Residual (negated): forces minus inertia and damping.
             for i in range(nn):
                 g = n0 + i
                 for d in range(3):
-                    rhs[6 * i + d] = force[g, d] - mass[g] * ((vel[g, d] - vn[g, d]) / hs + nu * vel[g, d])
+                    rhs[2 * i, d] = force[g, d] - mass[g] * ((vel[g, d] - vn[g, d]) / hs + nu * vel[g, d])
             for k in range(ne):
                 e = e0 + k
                 for d in range(3):
-                    rhs[3 * (2 * k + 1) + d] = (torque[e, d] + text[e, d] - J[e, d] / dil[e] * (
+                    rhs[2 * k + 1, d] = (torque[e, d] + text[e, d] - J[e, d] / dil[e] * (
                         (omega[e, d] - wn[e, d]) / hs + nu * omega[e, d]))
-            for q in range(ndof):
+            for q in range(nb):
                 if fixed[q]:
-                    rhs[q] = 0.0
+                    rhs[q, 0] = 0.0
+                    rhs[q, 1] = 0.0
+                    rhs[q, 2] = 0.0
             # Newton matrix, refactored only when the last update did not shrink fast enough
             # (chord iterations are ~3x cheaper); if the stress terms make it indefinite,
             # retry with Gauss-Newton.
@@ -406,39 +469,59 @@ def advance_rod_implicit(
                 if not refactor:
                     break
                 _assemble(hs, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B,
-                          rest_vor, mass, J, nu, kv, geometric, ab, M, K)
-                if planes.shape[0] > 0:
-                    _contacts(n0, nn, hs, planes, pos, vel, xn, mass, node_radius, anchor,
-                              anchor_on, force, contact_force, ab, False, False)
-                for q in range(ndof):
-                    if fixed[q]:
-                        for k in range(1, BAND + 1):
-                            ab[q, k] = 0.0
-                            if q + k < ndof:
-                                ab[q + k, k] = 0.0
-                        ab[q, 0] = 1.0
-                bad = band_cholesky(ab, ndof, BAND)
+                          rest_vor, mass, J, nu, kv, geometric, A, M, K)
+                if has_planes:
+                    _contacts(ITERATE, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
+                              anchor_on, c_plane, c_stick, c_dir, force, contact_force, A, False)
+                for q in range(nb):
+                    if fixed[q]:  # prescribed unknowns: identity row and column
+                        for d in range(1, BLOCK_BAND + 1):
+                            A[q, d] = 0.0
+                            if q + d < nb:
+                                A[q + d, d] = 0.0
+                        A[q, 0] = 0.0
+                        for d in range(3):
+                            A[q, 0, d, d] = 1.0
+                bad = block_cholesky(A, nb)
                 if bad == 0:
                     break
-                refactor = True
             if bad != 0:
                 failed = NOT_CONVERGED
-                fail_at = (bad - 1) // 6
+                fail_at = (bad - 1) // 2
                 break
-            band_solve(ab, ndof, BAND, rhs)
-            # Apply the update: positions add, frames rotate by the material rotation vector.
+            block_solve(A, nb, rhs)
             update = 0.0
+            for i in range(nn):
+                for d in range(3):
+                    update = max(update, abs(rhs[2 * i, d]))
+            for k in range(ne):
+                b = 2 * k + 1
+                update = max(update, length_scale * (abs(rhs[b, 0]) + abs(rhs[b, 1]) + abs(rhs[b, 2])))
+            # Damped Newton: when the update stops shrinking the iterate is overshooting
+            # (a locally non-convex problem, e.g. a compressed soft rod), so take a shorter step.
+            step_scale = step_scale * 0.5 if update >= last_update else 1.0
+            last_update = update
+            update *= step_scale
+            # Apply the update: positions add, frames rotate by the material rotation vector.
             for i in range(nn):
                 g = n0 + i
                 for d in range(3):
-                    pos[g, d] += rhs[6 * i + d]
-                    update = max(update, abs(rhs[6 * i + d]))
+                    pos[g, d] += step_scale * rhs[2 * i, d]
             for k in range(ne):
-                b = 3 * (2 * k + 1)
-                rotate_directors(Q, e0 + k, 1.0, rhs[b], rhs[b + 1], rhs[b + 2])
-                update = max(update, length_scale * (abs(rhs[b]) + abs(rhs[b + 1]) + abs(rhs[b + 2])))
-            if update <= tol * length_scale:
-                converged = True
+                b = 2 * k + 1
+                rotate_directors(Q, e0 + k, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
+            done_iterating = update <= tol * length_scale or it == budget
+            if done_iterating:
+                if has_planes and set_rounds < MAX_SET_ROUNDS:
+                    if _contacts(CHECK, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
+                                 anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band,
+                                 False) > 0:
+                        # The contact set changed: solve again with it (fresh matrix).
+                        set_rounds += 1
+                        budget = it + max_iter
+                        previous = 0.0  # forces a fresh factorisation
+                        continue
+                converged = update <= tol * length_scale
                 break
         if failed == OK and not converged and update > ACCEPT * length_scale:
             failed = NOT_CONVERGED
@@ -472,9 +555,9 @@ def advance_rod_implicit(
             omega[e, 0] = w0 / hs
             omega[e, 1] = w1 / hs
             omega[e, 2] = w2 / hs
-        if planes.shape[0] > 0:
-            _contacts(n0, nn, hs, planes, pos, vel, xn, mass, node_radius, anchor, anchor_on,
-                      force, contact_force, no_band, True, False)
+        if has_planes:
+            _contacts(FINISH, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
+                      anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)
         for c in range(c0, c1):
             for d in range(3):
                 vel[pcon_node[c], d] = pcon_data[c, 3 + d]
@@ -498,6 +581,7 @@ def advance_rod_implicit(
                 last_hs = 0.0
             hs = h
     status[r, 2] = n_steps
+    h_prev[r] = last_hs
     return t
 
 
@@ -505,21 +589,21 @@ def advance_rod_implicit(
 def advance_rods_implicit(
     r_begin, r_end, n_steps, t, dt, gravity, max_strain, max_iter, tol,
     rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_tau, rod_pcon, rod_fcon,
-    pos, vel, mass, node_radius, fext, force, contact_force,
+    pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, times, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, stats,
+    planes, status, times, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev,
 ):
     """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods."""
     for r in range(r_begin, r_end):
         times[r] = advance_rod_implicit(
             r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
             rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_tau, rod_pcon, rod_fcon,
-            pos, vel, mass, node_radius, fext, force, contact_force,
+            pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
             Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
             B, rest_vor, rest_kappa, kappa, couple,
             scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
             pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-            planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, stats)
+            planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev)

@@ -89,7 +89,7 @@ def _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain):
 def advance_rod(
     r, n_steps, t, dt, gravity, max_strain,
     rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
-    pos, vel, mass, node_radius, fext, force, contact_force,
+    pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
@@ -131,7 +131,8 @@ def advance_rod(
             for j in range(3):
                 torque[e, j] += text[e, j]
         if n_planes > 0:
-            _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, force, dt, contact_force)
+            _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt,
+                            contact_force)
 
         code, k = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
         if code != OK:
@@ -167,11 +168,12 @@ def advance_rod(
 
 
 @njit(cache=True, error_model="numpy")
-def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, force, dt, contact_force):
+def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt, contact_force):
     """Add plane contact forces to the rod's nodes (also kept in ``contact_force``).
 
     ``planes`` rows: point(3), normal(3), stiffness, damping, mu_s, mu_k, auto flag; an
-    automatic penalty uses each node's mass: contact frequency 0.2/dt, critically damped.
+    automatic penalty uses each node's mass (contact frequency 0.2/dt, critically damped), but
+    at least ``node_kmin`` (1 % of the element's axial stiffness).
     """
     for i in range(n0, n0 + nn):
         contact_force[i, 0] = 0.0
@@ -181,7 +183,7 @@ def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, force, dt, cont
             k = planes[p, 6]
             c = planes[p, 7]
             if planes[p, 10] > 0.0:
-                k = mass[i] * (0.2 / dt) ** 2
+                k = max(mass[i] * (0.2 / dt) ** 2, node_kmin[i])
                 c = 2.0 * (k * mass[i]) ** 0.5
             elif c < 0.0:
                 c = 2.0 * (k * mass[i]) ** 0.5
@@ -202,7 +204,7 @@ def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, force, dt, cont
 def advance_rods(
     r_begin, r_end, n_steps, t, dt, gravity, max_strain,
     rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
-    pos, vel, mass, node_radius, fext, force, contact_force,
+    pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
@@ -214,7 +216,7 @@ def advance_rods(
         times[r] = advance_rod(
             r, n_steps, t, dt, gravity, max_strain,
             rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
-            pos, vel, mass, node_radius, fext, force, contact_force,
+            pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
             Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
             B, rest_vor, rest_kappa, kappa, couple,
             scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
