@@ -51,34 +51,45 @@ def _chol3_inverse(A, I) -> bool:
     return True
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _sub_abt(A, I, d, P, p, Q, q):
+    """A[I, d] -= A[P, p] @ A[Q, q]^T (3x3 blocks)."""
+    for a in range(3):
+        x0 = A[P, p, a, 0]
+        x1 = A[P, p, a, 1]
+        x2 = A[P, p, a, 2]
+        for b in range(3):
+            A[I, d, a, b] -= x0 * A[Q, q, b, 0] + x1 * A[Q, q, b, 1] + x2 * A[Q, q, b, 2]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _times_inv_t(A, I, d, J):
+    """A[I, d] <- A[I, d] @ A[J, 0]^T, where A[J, 0] holds an inverse lower Cholesky block."""
+    for a in range(3):
+        s0 = A[I, d, a, 0]
+        s1 = A[I, d, a, 1]
+        s2 = A[I, d, a, 2]
+        A[I, d, a, 0] = s0 * A[J, 0, 0, 0]
+        A[I, d, a, 1] = s0 * A[J, 0, 1, 0] + s1 * A[J, 0, 1, 1]
+        A[I, d, a, 2] = s0 * A[J, 0, 2, 0] + s1 * A[J, 0, 2, 1] + s2 * A[J, 0, 2, 2]
+
+
 @njit(cache=True, error_model="numpy")
 def block_cholesky(A, nb) -> int:
     """In-place block Cholesky of the first ``nb`` block rows; 0, or 1 + the first block row
     whose pivot block is not positive definite."""
     for I in range(nb):
-        for d in range(min(I, BLOCK_BAND), -1, -1):
-            J = I - d
-            # S = A_IJ - sum_K L_IK L_JK^T over K < J within both bands
-            for K in range(max(I - BLOCK_BAND, J - BLOCK_BAND, 0), J):
-                dI = I - K
-                dJ = J - K
-                for a in range(3):
-                    for b in range(3):
-                        s = 0.0
-                        for c in range(3):
-                            s += A[I, dI, a, c] * A[J, dJ, b, c]
-                        A[I, d, a, b] -= s
-            if d > 0:
-                # L_IJ = S L_JJ^-T, with A[J, 0] = L_JJ^-1 (lower triangular)
-                for a in range(3):
-                    s0 = A[I, d, a, 0]
-                    s1 = A[I, d, a, 1]
-                    s2 = A[I, d, a, 2]
-                    for b in range(3):
-                        A[I, d, a, b] = (s0 * A[J, 0, b, 0] + s1 * A[J, 0, b, 1]
-                                         + s2 * A[J, 0, b, 2])
-            elif not _chol3_inverse(A, I):
-                return I + 1
+        if I >= 2:  # L[I, I-2] = A[I, I-2] L[I-2, I-2]^-T
+            _times_inv_t(A, I, 2, I - 2)
+        if I >= 1:  # L[I, I-1] = (A[I, I-1] - L[I, I-2] L[I-1, I-2]^T) L[I-1, I-1]^-T
+            if I >= 2:
+                _sub_abt(A, I, 1, I, 2, I - 1, 1)
+            _times_inv_t(A, I, 1, I - 1)
+            _sub_abt(A, I, 0, I, 1, I, 1)
+        if I >= 2:
+            _sub_abt(A, I, 0, I, 2, I, 2)
+        if not _chol3_inverse(A, I):
+            return I + 1
     return 0
 
 
