@@ -364,8 +364,10 @@ def advance_rod_implicit(
     elapsed = 0.0  # time done within the current full step
     last_hs = h_prev[r]  # last accepted sub-step (0: no usable acceleration yet)
     while done < n_steps:
-        # The predictor extrapolates with the last step's acceleration: one Newton
-        # iteration fewer on smooth motion. vn still holds the previous step's start velocity.
+        # Predictor: constant velocity plus a small third-order term h^2 (v - v_prev) (vn still
+        # holds the previous step's start velocity). A full acceleration extrapolation,
+        # h (v - v_prev), saves ~0.7 Newton iterations on smooth swings but misleads Newton
+        # after contact events, so it is not used.
         extrapolate = hs if last_hs == hs else 0.0
         for i in range(n0, n0 + nn):
             for d in range(3):
