@@ -12,7 +12,7 @@ from typing import Sequence
 import numpy as np
 
 GHOST_NODES, GHOST_ELEMENTS, GHOST_VORONOI = 1, 2, 3
-CONTACT_STIFFNESS_FLOOR = 0.01  # automatic plane stiffness >= this times EA / dl
+CONTACT_STIFFNESS_FLOOR = 1e-3  # automatic plane stiffness >= this times EA / dl
 
 
 class Block:
@@ -37,7 +37,7 @@ class Block:
         self.vel = np.zeros((N, 3))
         self.mass = np.ones(N)
         self.node_radius = np.zeros(N)
-        # Floor of the automatic contact stiffness (N/m): 1 % of the adjacent elements' axial
+        # Floor of the automatic contact stiffness (N/m): a fraction of the adjacent elements' axial
         # stiffness, so a stiff rod pressing on a plane does not sink into it.
         self.node_kmin = np.zeros(N)
         self.fext = np.zeros((N, 3))

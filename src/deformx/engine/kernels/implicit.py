@@ -252,7 +252,7 @@ def _contacts(phase, n0, nn, h, planes, pos, xn, mass, node_radius, node_kmin, a
         d2 -= dn * nz
         dmag = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
         if phase == CHECK:
-            if gap > 0.0:  # separated (the damper may pull briefly while it leaves)
+            if fn <= 0.0:  # the plane would pull: the node is leaving it
                 c_plane[g] = -1
                 changes += 1
             elif c_stick[g] == 1:
@@ -364,11 +364,16 @@ def advance_rod_implicit(
     elapsed = 0.0  # time done within the current full step
     last_hs = h_prev[r]  # last accepted sub-step (0: no usable acceleration yet)
     while done < n_steps:
-        # Predictor: constant velocity plus a small third-order term h^2 (v - v_prev) (vn still
-        # holds the previous step's start velocity). A full acceleration extrapolation,
-        # h (v - v_prev), saves ~0.7 Newton iterations on smooth swings but misleads Newton
-        # after contact events, so it is not used.
-        extrapolate = hs if last_hs == hs else 0.0
+        # Predictor: x + h v + h (v - v_prev), i.e. extrapolating the last step's acceleration
+        # (vn still holds the previous step's start velocity): ~0.7 Newton iterations fewer on
+        # smooth motion. Contact makes velocities jump and then this misleads Newton, so a rod
+        # touching a plane only gets a small third-order term h^2 (v - v_prev).
+        touching = False
+        for i in range(n0, n0 + nn):
+            if anchor_on[i] != 0:
+                touching = True
+                break
+        extrapolate = 0.0 if last_hs != hs else (hs if touching else 1.0)
         for i in range(n0, n0 + nn):
             for d in range(3):
                 accel_term = extrapolate * (vel[i, d] - vn[i, d])

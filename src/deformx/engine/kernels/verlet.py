@@ -173,7 +173,7 @@ def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, forc
 
     ``planes`` rows: point(3), normal(3), stiffness, damping, mu_s, mu_k, auto flag; an
     automatic penalty uses each node's mass (contact frequency 0.2/dt, critically damped), but
-    at least ``node_kmin`` (1 % of the element's axial stiffness).
+    at least ``node_kmin`` (0.1 % of the elements' axial stiffness EA / dl).
     """
     for i in range(n0, n0 + nn):
         contact_force[i, 0] = 0.0
