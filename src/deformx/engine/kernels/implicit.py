@@ -310,6 +310,19 @@ def _contacts(phase, n0, nn, h, planes, pos, xn, mass, node_radius, node_kmin, a
     return changes
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _implied_rates(n0, nn, e0, ne, h, pos, xn, Q, Qn, vel, omega):
+    """Backward-Euler velocities of the iterate: (x - x_n) / h and log(Q Q_n^T) / h."""
+    for i in range(n0, n0 + nn):
+        for d in range(3):
+            vel[i, d] = (pos[i, d] - xn[i, d]) / h
+    for e in range(e0, e0 + ne):
+        w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
+        omega[e, 0] = w0 / h
+        omega[e, 1] = w1 / h
+        omega[e, 2] = w2 / h
+
+
 @njit(cache=True, error_model="numpy")
 def advance_rod_implicit(
     r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
@@ -422,15 +435,7 @@ def advance_rod_implicit(
         previous = math.inf
         while it < budget:
             it += 1
-            # Velocities implied by the iterate.
-            for i in range(n0, n0 + nn):
-                for d in range(3):
-                    vel[i, d] = (pos[i, d] - xn[i, d]) / hs
-            for e in range(e0, e0 + ne):
-                w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
-                omega[e, 0] = w0 / hs
-                omega[e, 1] = w1 / hs
-                omega[e, 2] = w2 / hs
+            _implied_rates(n0, nn, e0, ne, hs, pos, xn, Q, Qn, vel, omega)
             rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                                pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                                rest_kappa, force, torque, dil, kappa, stress, couple,
@@ -554,14 +559,7 @@ def advance_rod_implicit(
             status[r, 2] = done
             return t
         # Accepted: velocities, friction anchors and clamp rates at the new state.
-        for i in range(n0, n0 + nn):
-            for d in range(3):
-                vel[i, d] = (pos[i, d] - xn[i, d]) / hs
-        for e in range(e0, e0 + ne):
-            w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
-            omega[e, 0] = w0 / hs
-            omega[e, 1] = w1 / hs
-            omega[e, 2] = w2 / hs
+        _implied_rates(n0, nn, e0, ne, hs, pos, xn, Q, Qn, vel, omega)
         if has_planes:
             _contacts(FINISH, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
                       anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)
