@@ -73,6 +73,7 @@ class Block:
         self.c_dir = np.zeros((N, 3))
         self.stats = np.zeros((R, 5))
         self.h_prev = np.zeros(R)  # last accepted (sub-)step per rod: the predictor's memory
+        self.rate = np.ones(R)  # Newton contraction rate per rod, for the convergence test
 
         self.B = np.zeros((V, 3))
         self.rest_vor = np.ones(V)

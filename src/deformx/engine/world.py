@@ -218,7 +218,7 @@ class World:
                 self._pcon_node, self._pcon_data, self._fcon_elem, self._fcon_Q0, self._fcon_data,
                 self._planes_arr, self._status, self._times,
                 b.xn, b.vn, b.Qn, b.wn, b.fn_el, b.tn_el, b.anchor, b.anchor_on, b.c_plane,
-                b.c_stick, b.c_dir, b.stats, b.h_prev)
+                b.c_stick, b.c_dir, b.stats, b.h_prev, b.rate)
         self._dirty = False
 
     def step(self, n_steps: int = 1) -> None:

@@ -37,6 +37,7 @@ NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-step
 # step halvings
 N_STATS = 5
 CHORD_RATE = 0.1  # reuse the factor while each update is below this fraction of the last
+EARLY_LIMIT = 10.0  # one-iteration steps only when the update is within this many tolerances
 ACCEPT = 1e-2  # an unconverged update above this fraction of an element length is rejected
 MAX_REFINE = 64.0  # a step is halved at most down to dt / MAX_REFINE before giving up
 
@@ -332,7 +333,7 @@ def advance_rod_implicit(
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev,
+    planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
 ):
     """Advance rod ``r`` by ``n_steps`` backward-Euler steps of ``dt``; returns the new time.
 
@@ -431,7 +432,7 @@ def advance_rod_implicit(
         failed = OK
         fail_at = -1
         it = 0
-        update = 0.0
+        update = math.inf  # so the second iteration reuses the first one's factor (chord)
         previous = math.inf
         while it < budget:
             it += 1
@@ -522,7 +523,15 @@ def advance_rod_implicit(
             for k in range(ne):
                 b = 2 * k + 1
                 rotate_directors(Q, e0 + k, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
-            done_iterating = update <= tol * length_scale or it == budget
+            # Convergence: what is left after this update is about rate * update, with the
+            # contraction rate measured on this and earlier steps (CVODE's test), so smooth
+            # steps can stop after one iteration. Not for a rod touching a plane, whose
+            # contact set must be confirmed by a converged solve.
+            if it >= 2 and previous > 0.0 and previous < math.inf:
+                rate[r] = max(0.3 * rate[r], update / previous)
+            early = (it == 1 and not touching and update <= EARLY_LIMIT * tol * length_scale
+                     and rate[r] * update <= tol * length_scale)
+            done_iterating = early or update <= tol * length_scale or it == budget
             if done_iterating:
                 if has_planes and set_rounds < MAX_SET_ROUNDS:
                     if _contacts(CHECK, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
@@ -533,7 +542,7 @@ def advance_rod_implicit(
                         budget = it + max_iter
                         previous = 0.0  # forces a fresh factorisation
                         continue
-                converged = update <= tol * length_scale
+                converged = early or update <= tol * length_scale
                 break
         if failed == OK and not converged and update > ACCEPT * length_scale:
             failed = NOT_CONVERGED
@@ -599,7 +608,7 @@ def advance_rods_implicit(
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, times, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev,
+    planes, status, times, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
 ):
     """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods."""
     for r in range(r_begin, r_end):
@@ -611,4 +620,4 @@ def advance_rods_implicit(
             B, rest_vor, rest_kappa, kappa, couple,
             scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
             pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-            planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev)
+            planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate)
