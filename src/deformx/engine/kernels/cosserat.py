@@ -15,6 +15,17 @@ from numba import njit
 from .so3 import relative_rotation_vector
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed):
+    """First node, element and Voronoi index of rod ``r`` in the packed arrays, and its
+    element, node and Voronoi counts (a closed rod has as many nodes as elements)."""
+    ne = rod_ne[r]
+    closed = rod_closed[r] != 0
+    nn = ne if closed else ne + 1
+    nv = ne if closed else ne - 1
+    return rod_node0[r], rod_elem0[r], rod_vor0[r], ne, nn, nv, closed
+
+
 @njit(cache=True, error_model="numpy")
 def rod_internal_loads(
     r: int, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
@@ -27,13 +38,7 @@ def rod_internal_loads(
     dilatation), ``kappa`` (Voronoi curvature), ``stress`` and ``couple`` (material-frame
     resultants) are left for diagnostics and divergence checks.
     """
-    n0 = rod_node0[r]
-    e0 = rod_elem0[r]
-    v0 = rod_vor0[r]
-    ne = rod_ne[r]
-    closed = rod_closed[r] != 0
-    nn = ne if closed else ne + 1
-    nv = ne if closed else ne - 1
+    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
 
     # Stretch / shear: element strain, stress, and the lab-frame stress Q^T n / e.
     for k in range(ne):

@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from .banded import BLOCK_BAND, block_cholesky, block_solve
-from .cosserat import rod_internal_loads
+from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
 from .verlet import OK, _check, _constrain_values
 
@@ -342,13 +342,7 @@ def advance_rod_implicit(
     """
     h = dt
     kv = 1.0
-    n0 = rod_node0[r]
-    e0 = rod_elem0[r]
-    v0 = rod_vor0[r]
-    ne = rod_ne[r]
-    closed = rod_closed[r] != 0
-    nn = ne if closed else ne + 1
-    nv = ne if closed else ne - 1
+    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
     c0, c1 = rod_pcon[r], rod_pcon[r + 1]
     f0, f1 = rod_fcon[r], rod_fcon[r + 1]
     nu = rod_nu[r]

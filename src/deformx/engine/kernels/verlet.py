@@ -13,7 +13,7 @@ from __future__ import annotations
 from numba import njit
 
 from ..contact.plane import plane_contact_node
-from .cosserat import rod_internal_loads
+from .cosserat import rod_extent, rod_internal_loads
 from .so3 import rotate_directors
 
 # Divergence codes returned in status[r, 0].
@@ -101,13 +101,7 @@ def advance_rod(
     On divergence stops with ``status[r]`` = (code, element, steps done).
     """
     h = 0.5 * dt
-    n0 = rod_node0[r]
-    e0 = rod_elem0[r]
-    v0 = rod_vor0[r]
-    ne = rod_ne[r]
-    closed = rod_closed[r] != 0
-    nn = ne if closed else ne + 1
-    nv = ne if closed else ne - 1
+    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
     c0, c1 = rod_pcon[r], rod_pcon[r + 1]
     f0, f1 = rod_fcon[r], rod_fcon[r + 1]
     decay = rod_decay[r]
