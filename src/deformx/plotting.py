@@ -57,6 +57,18 @@ def load_record(path: str | Path) -> tuple[np.ndarray, list[np.ndarray]]:
     return time, rods
 
 
+def _checked_record(time, rods, caller: str) -> tuple[np.ndarray, list[np.ndarray], int]:
+    """Arrays of a record and its usable frame count; ValueError if it has no rods or frames."""
+    time = np.asarray(time, dtype=float)
+    rods = [np.asarray(r, dtype=float) for r in rods]
+    if not rods:
+        raise ValueError(f"{caller}: no rods to plot (expected at least one rod{{i}}_positions array)")
+    n_frames = min(len(time), *(len(r) for r in rods))
+    if n_frames == 0:
+        raise ValueError(f"{caller}: the record has no frames")
+    return time, rods, n_frames
+
+
 def _snapshot_indices(n_frames: int, n_snapshots: int) -> np.ndarray:
     if n_frames <= 0:
         return np.zeros(0, dtype=int)
@@ -120,13 +132,7 @@ def plot_snapshots(
     import matplotlib
     from matplotlib import cm, colors
 
-    time = np.asarray(time, dtype=float)
-    rods = [np.asarray(r, dtype=float) for r in rods]
-    if not rods:
-        raise ValueError("plot_snapshots: no rods to plot (expected at least one rod{i}_positions array)")
-    n_frames = min(len(time), *(len(r) for r in rods))
-    if n_frames == 0:
-        raise ValueError("plot_snapshots: the record has no frames")
+    time, rods, n_frames = _checked_record(time, rods, "plot_snapshots")
     idx = _snapshot_indices(n_frames, n_snapshots)
     t0, t1 = float(time[0]), float(time[n_frames - 1])
     norm = colors.Normalize(vmin=t0, vmax=t1 if t1 > t0 else t0 + 1e-12)
@@ -185,13 +191,7 @@ def write_video(
     """
     import imageio.v2 as imageio
 
-    time = np.asarray(time, dtype=float)
-    rods = [np.asarray(r, dtype=float) for r in rods]
-    if not rods:
-        raise ValueError("write_video: no rods to draw")
-    n_frames = min(len(time), *(len(r) for r in rods))
-    if n_frames == 0:
-        raise ValueError("write_video: the record has no frames")
+    time, rods, n_frames = _checked_record(time, rods, "write_video")
     frames = np.arange(n_frames)
     if max_frames is not None and n_frames > max_frames:
         frames = np.unique(np.linspace(0, n_frames - 1, max_frames).round().astype(int))

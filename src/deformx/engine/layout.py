@@ -82,7 +82,6 @@ class Block:
         self.couple = np.zeros((V, 3))
         self.scr_C = np.zeros((V, 3))
         self.scr_X = np.zeros((V, 3))
-        self.scr_vdil = np.ones(V)
 
         for i, rod in enumerate(rods):
             n = slice(self.rod_node0[i], self.rod_node0[i] + nn[i])
@@ -118,6 +117,3 @@ class Block:
 
     def node_slice(self, i: int, rod) -> slice:
         return slice(self.rod_node0[i], self.rod_node0[i] + rod.n_nodes)
-
-    def elem_slice(self, i: int, rod) -> slice:
-        return slice(self.rod_elem0[i], self.rod_elem0[i] + rod.n_elements)

@@ -19,6 +19,22 @@ _SLIP_EPS = 1e-12
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def plane_penalty(planes, p, mass, k_floor, dt_ref):
+    """Penalty stiffness (N/m) and damping (N s/m) of plane ``p`` for a node of ``mass``.
+
+    The automatic stiffness gives a contact frequency of 0.2 / ``dt_ref`` but at least
+    ``k_floor``; the automatic damping is critical for that stiffness.
+    """
+    k = planes[p, 6]
+    if planes[p, 10] > 0.0:
+        k = max(mass * (0.2 / dt_ref) ** 2, k_floor)
+    c = planes[p, 7]
+    if c < 0.0:
+        c = 2.0 * math.sqrt(k * mass)
+    return k, c
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def plane_contact_node(x0, x1, x2, v0, v1, v2, fo0, fo1, fo2, mass, radius, dt,
                        p0, p1, p2, n0, n1, n2, stiffness, damping, mu_s, mu_k):
     """Contact force (N, lab) on one node and the normal stiffness (N/m; 0 if apart).

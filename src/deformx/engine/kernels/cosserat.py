@@ -30,7 +30,7 @@ def rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed):
 def rod_internal_loads(
     r: int, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
     pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor, rest_kappa,
-    force, torque, dil, kappa, stress, couple, scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+    force, torque, dil, kappa, stress, couple, scr_lab, scr_C, scr_X, scr_edot,
 ) -> None:
     """Write internal forces (lab, N) and torques (material, N m) of rod ``r``.
 
@@ -99,7 +99,6 @@ def rod_internal_loads(
         vj = v0 + j
         inv_v0 = 1.0 / rest_vor[vj]
         vd = 0.5 * (rest_len[ea] * dil[ea] + rest_len[eb] * dil[eb]) * inv_v0
-        scr_vdil[vj] = vd
         r0, r1, r2 = relative_rotation_vector(Q, ea, Q, eb)
         inv3 = 1.0 / (vd * vd * vd)
         kappa[vj, 0] = r0 * inv_v0

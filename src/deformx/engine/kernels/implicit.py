@@ -27,6 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..contact.plane import plane_penalty
 from .banded import BLOCK_BAND, block_cholesky, block_solve
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
@@ -230,12 +231,8 @@ def _contacts(phase, n0, nn, h, planes, pos, xn, mass, node_radius, node_kmin, a
         p = c_plane[g]
         nx, ny, nz = planes[p, 3], planes[p, 4], planes[p, 5]
         gap = _plane_gap(planes, p, pos, g, node_radius[g])
-        k = planes[p, 6]
-        c = planes[p, 7]
-        if planes[p, 10] > 0.0:
-            k = max(mass[g] * (0.2 / min(h, 1e-4)) ** 2, node_kmin[g])
-        if c < 0.0:
-            c = 2.0 * math.sqrt(k * mass[g])
+        # As stiff as the explicit integrator's contact at dt <= 1e-4 s.
+        k, c = plane_penalty(planes, p, mass[g], node_kmin[g], min(h, 1e-4))
         u0 = pos[g, 0] - xn[g, 0]
         u1 = pos[g, 1] - xn[g, 1]
         u2 = pos[g, 2] - xn[g, 2]
@@ -331,7 +328,7 @@ def advance_rod_implicit(
     pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
-    scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+    scr_lab, scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
 ):
@@ -341,7 +338,6 @@ def advance_rod_implicit(
     time (s): internal loads become F + tau dF/dt with dF/dt ~ (F - F_n) / h.
     """
     h = dt
-    kv = 1.0
     n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
     c0, c1 = rod_pcon[r], rod_pcon[r + 1]
     f0, f1 = rod_fcon[r], rod_fcon[r + 1]
@@ -399,7 +395,7 @@ def advance_rod_implicit(
             rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                                pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                                rest_kappa, force, torque, dil, kappa, stress, couple,
-                               scr_lab, scr_C, scr_X, scr_edot, scr_vdil)
+                               scr_lab, scr_C, scr_X, scr_edot)
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     fn_el[i, d] = force[i, d]
@@ -434,7 +430,7 @@ def advance_rod_implicit(
             rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                                pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                                rest_kappa, force, torque, dil, kappa, stress, couple,
-                               scr_lab, scr_C, scr_X, scr_edot, scr_vdil)
+                               scr_lab, scr_C, scr_X, scr_edot)
             failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
             if failed != OK:
                 break
@@ -600,7 +596,7 @@ def advance_rods_implicit(
     pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
-    scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+    scr_lab, scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status, times, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
 ):
@@ -612,6 +608,6 @@ def advance_rods_implicit(
             pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
             Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
             B, rest_vor, rest_kappa, kappa, couple,
-            scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+            scr_lab, scr_C, scr_X, scr_edot,
             pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
             planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..contact.plane import plane_contact_node
+from ..contact.plane import plane_contact_node, plane_penalty
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import rotate_directors
 
@@ -92,7 +92,7 @@ def advance_rod(
     pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
-    scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+    scr_lab, scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status,
 ):
@@ -116,7 +116,7 @@ def advance_rod(
         rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                            pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                            rest_kappa, force, torque, dil, kappa, stress, couple,
-                           scr_lab, scr_C, scr_X, scr_edot, scr_vdil)
+                           scr_lab, scr_C, scr_X, scr_edot)
         for i in range(n0, n0 + nn):
             force[i, 0] += mass[i] * g0 + fext[i, 0]
             force[i, 1] += mass[i] * g1 + fext[i, 1]
@@ -174,13 +174,7 @@ def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, forc
         contact_force[i, 1] = 0.0
         contact_force[i, 2] = 0.0
         for p in range(planes.shape[0]):
-            k = planes[p, 6]
-            c = planes[p, 7]
-            if planes[p, 10] > 0.0:
-                k = max(mass[i] * (0.2 / dt) ** 2, node_kmin[i])
-                c = 2.0 * (k * mass[i]) ** 0.5
-            elif c < 0.0:
-                c = 2.0 * (k * mass[i]) ** 0.5
+            k, c = plane_penalty(planes, p, mass[i], node_kmin[i], dt)
             f0, f1, f2, _ = plane_contact_node(
                 pos[i, 0], pos[i, 1], pos[i, 2], vel[i, 0], vel[i, 1], vel[i, 2],
                 force[i, 0], force[i, 1], force[i, 2], mass[i], node_radius[i], dt,
@@ -201,7 +195,7 @@ def advance_rods(
     pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
-    scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+    scr_lab, scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status, times,
 ):
@@ -213,6 +207,6 @@ def advance_rods(
             pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
             Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
             B, rest_vor, rest_kappa, kappa, couple,
-            scr_lab, scr_C, scr_X, scr_edot, scr_vdil,
+            scr_lab, scr_C, scr_X, scr_edot,
             pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
             planes, status)
