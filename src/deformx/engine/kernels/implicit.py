@@ -28,6 +28,8 @@ import numpy as np
 from numba import njit
 
 from ..contact.plane import plane_penalty
+from ..contact.rodrod import rod_pair_forces
+from ..contact.segments import rod_collider_contacts
 from .banded import BLOCK_BAND, block_cholesky, block_solve
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
@@ -308,6 +310,47 @@ def _contacts(phase, n0, nn, h, planes, pos, xn, mass, node_radius, node_kmin, a
     return changes
 
 
+@njit(cache=True, error_model="numpy")
+def _more_contacts(r, n0, nn, e0, ne, h, pos, vel, xn, mass, node_radius, node_kmin, cols,
+                   col_anchor, col_anchor_id, col_pen, el_K, wrench, pairs, n_pairs, seg_a, seg_b, seg_rod,
+                   seg_radius, xp, vp, rr, force, contact_force, clear, commit):
+    """Mesh, primitive and rod-rod contact forces of the iterate, and their stiffness.
+
+    ``clear`` zeroes ``contact_force`` first (when no plane pass has written it); ``commit``
+    (accepted step) stores the friction anchors and the reactions.
+    """
+    if clear:
+        for i in range(n0, n0 + nn):
+            for d in range(3):
+                contact_force[i, d] = 0.0
+    for e in range(e0, e0 + ne):
+        for q in range(3):
+            for i in range(3):
+                for j in range(3):
+                    el_K[e, q, i, j] = 0.0
+    # As stiff as the explicit integrator's contact at dt <= 1e-4 s (as for planes).
+    dt_ref = min(h, 1e-4)
+    if cols[0].shape[0] > 0:
+        rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, xn, mass, node_radius,
+                              node_kmin, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, force,
+                              contact_force, commit, True)
+    if n_pairs > 0:
+        rod_pair_forces(r, pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, pos, vel, xp, vp,
+                        mass, node_kmin, dt_ref, h, rr, force, contact_force, el_K, True)
+
+
+@njit(cache=True, error_model="numpy")
+def _add_element_stiffness(A, e0, ne, nn, el_K):
+    """Add each element's contact stiffness blocks (node a-a, b-a, b-b) to the Newton matrix."""
+    for k in range(ne):
+        e = e0 + k
+        ba = 2 * k
+        bb = 2 * k + 2 if k + 1 < nn else 0
+        _add_block(A, ba, ba, el_K[e, 0], False)
+        _add_block(A, bb, bb, el_K[e, 2], False)
+        _add_block(A, bb, ba, el_K[e, 1], False)
+
+
 @njit(cache=True, inline="always", error_model="numpy")
 def _implied_rates(n0, nn, e0, ne, h, pos, xn, Q, Qn, vel, omega):
     """Backward-Euler velocities of the iterate: (x - x_n) / h and log(Q Q_n^T) / h."""
@@ -331,11 +374,17 @@ def advance_rod_implicit(
     scr_lab, scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
+    cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
+    pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr,
 ):
     """Advance rod ``r`` by ``n_steps`` backward-Euler steps of ``dt``; returns the new time.
 
     ``rod_nu`` is the uniform damping rate (1/s), ``rod_tau`` the Kelvin-Voigt retardation
     time (s): internal loads become F + tau dF/dt with dF/dt ~ (F - F_n) / h.
+
+    Contact with meshes and primitives (``cols``) and rod-rod contact (the candidate ``pairs``;
+    other rods at their predicted positions ``xp``) enter each Newton iteration through force
+    and stiffness (``el_K``: per element, node blocks a-a, b-a, b-b).
     """
     h = dt
     n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
@@ -351,6 +400,12 @@ def advance_rod_implicit(
     K = np.empty((3, 3))
     no_band = np.zeros((0, BLOCK_BAND + 1, 3, 3))
     has_planes = planes.shape[0] > 0
+    n_cols = cols[0].shape[0]
+    own_pairs = 0
+    for p in range(n_pairs):
+        if seg_rod[pairs[p, 0]] == r or seg_rod[pairs[p, 1]] == r:
+            own_pairs += 1
+    more_contacts = n_cols > 0 or own_pairs > 0
     acc = np.zeros((nn, 3))  # predictor: h * (last step's acceleration), per node
     alpha = np.zeros((ne, 3))  # and per element
     # Clamped unknowns: their values are prescribed, so their rows/columns drop out.
@@ -375,6 +430,14 @@ def advance_rod_implicit(
         touching = False
         for i in range(n0, n0 + nn):
             if anchor_on[i] != 0:
+                touching = True
+                break
+        for i in range(n0, n0 + nn):  # colliders: node anchors, then element anchors
+            if col_anchor_id[i] >= 0:
+                touching = True
+                break
+        for e in range(e0, e0 + ne):
+            if col_anchor_id[pos.shape[0] + e] >= 0:
                 touching = True
                 break
         extrapolate = 0.0 if last_hs != hs else (hs if touching else 1.0)
@@ -447,6 +510,11 @@ def advance_rod_implicit(
             if has_planes:
                 _contacts(ITERATE, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
                           anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, True)
+            if more_contacts:
+                _more_contacts(r, n0, nn, e0, ne, hs, pos, vel, xn, mass, node_radius, node_kmin,
+                               cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, pairs, n_pairs,
+                               seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr, force,
+                               contact_force, not has_planes, False)
             # Residual (negated): forces minus inertia and damping.
             for i in range(nn):
                 g = n0 + i
@@ -476,6 +544,8 @@ def advance_rod_implicit(
                 if has_planes:
                     _contacts(ITERATE, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
                               anchor_on, c_plane, c_stick, c_dir, force, contact_force, A, False)
+                if more_contacts:
+                    _add_element_stiffness(A, e0, ne, nn, el_K)
                 for q in range(nb):
                     if fixed[q]:  # prescribed unknowns: identity row and column
                         for d in range(1, BLOCK_BAND + 1):
@@ -562,6 +632,11 @@ def advance_rod_implicit(
         if has_planes:
             _contacts(FINISH, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
                       anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)
+        if more_contacts:
+            _more_contacts(r, n0, nn, e0, ne, hs, pos, vel, xn, mass, node_radius, node_kmin,
+                           cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, pairs, n_pairs,
+                           seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr, force,
+                           contact_force, not has_planes, True)
         for c in range(c0, c1):
             for d in range(3):
                 vel[pcon_node[c], d] = pcon_data[c, 3 + d]
@@ -599,6 +674,8 @@ def advance_rods_implicit(
     scr_lab, scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status, times, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
+    cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
+    pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr,
 ):
     """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods."""
     for r in range(r_begin, r_end):
@@ -610,4 +687,6 @@ def advance_rods_implicit(
             B, rest_vor, rest_kappa, kappa, couple,
             scr_lab, scr_C, scr_X, scr_edot,
             pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-            planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate)
+            planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
+            cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
+            pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr)

@@ -4,8 +4,9 @@ Each step: half kinematic step, clamp values, internal loads, gravity + external
 contact, velocity update, clamp rates, uniform damping, half kinematic step, clamp values; the
 order is PyElastica's, so trajectories agree to round-off. Inside one call the closing half step
 of a step and the opening half step of the next are fused into one full step (same result to
-round-off, half the rotation work). Rods do not interact yet, so each rod advances all its steps
+round-off, half the rotation work). Without rod-rod contact each rod advances all its steps
 independently; ``advance_rods`` releases the GIL so the World can run groups of rods on threads.
+With rod-rod contact, :mod:`.coupled` calls ``advance_rod`` one step at a time for every rod.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 from numba import njit
 
 from ..contact.plane import plane_contact_node, plane_penalty
+from ..contact.segments import rod_collider_contacts
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import rotate_directors
 
@@ -94,10 +96,13 @@ def advance_rod(
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status,
+    planes, status, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, extra, use_extra,
 ):
     """Advance rod ``r`` by ``n_steps`` steps from time ``t``; returns the new time.
 
+    Contact: ``planes``, the colliders ``cols`` (meshes, primitives; friction anchors in
+    ``col_anchor*``, reactions into ``wrench[r]``) and, with ``use_extra``, the node forces
+    ``extra`` (rod-rod contact, computed by the caller at this step's mid-point).
     On divergence stops with ``status[r]`` = (code, element, steps done).
     """
     h = 0.5 * dt
@@ -107,6 +112,8 @@ def advance_rod(
     decay = rod_decay[r]
     g0, g1, g2 = gravity[0], gravity[1], gravity[2]
     n_planes = planes.shape[0]
+    n_cols = cols[0].shape[0]
+    touching = n_planes > 0 or n_cols > 0 or use_extra
 
     _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h)
     for step in range(n_steps):
@@ -124,9 +131,22 @@ def advance_rod(
         for e in range(e0, e0 + ne):
             for j in range(3):
                 torque[e, j] += text[e, j]
-        if n_planes > 0:
-            _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt,
-                            contact_force)
+        if touching:
+            for i in range(n0, n0 + nn):
+                for j in range(3):
+                    contact_force[i, j] = 0.0
+            if n_planes > 0:
+                _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt,
+                                contact_force)
+            if n_cols > 0:
+                rod_collider_contacts(r, n0, nn, e0, ne, dt, dt, pos, vel, pos, mass, node_radius,
+                                      node_kmin, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
+                                      force, contact_force, True, False)
+            if use_extra:
+                for i in range(n0, n0 + nn):
+                    for j in range(3):
+                        force[i, j] += extra[i, j]
+                        contact_force[i, j] += extra[i, j]
 
         code, k = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
         if code != OK:
@@ -163,16 +183,13 @@ def advance_rod(
 
 @njit(cache=True, error_model="numpy")
 def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt, contact_force):
-    """Add plane contact forces to the rod's nodes (also kept in ``contact_force``).
+    """Add plane contact forces to the rod's nodes (also added to ``contact_force``).
 
     ``planes`` rows: point(3), normal(3), stiffness, damping, mu_s, mu_k, auto flag; an
     automatic penalty uses each node's mass (contact frequency 0.2/dt, critically damped), but
     at least ``node_kmin`` (0.1 % of the elements' axial stiffness EA / dl).
     """
     for i in range(n0, n0 + nn):
-        contact_force[i, 0] = 0.0
-        contact_force[i, 1] = 0.0
-        contact_force[i, 2] = 0.0
         for p in range(planes.shape[0]):
             k, c = plane_penalty(planes, p, mass[i], node_kmin[i], dt)
             f0, f1, f2, _ = plane_contact_node(
@@ -197,7 +214,7 @@ def advance_rods(
     B, rest_vor, rest_kappa, kappa, couple,
     scr_lab, scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, times,
+    planes, status, times, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, extra, use_extra,
 ):
     """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods."""
     for r in range(r_begin, r_end):
@@ -209,4 +226,4 @@ def advance_rods(
             B, rest_vor, rest_kappa, kappa, couple,
             scr_lab, scr_C, scr_X, scr_edot,
             pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-            planes, status)
+            planes, status, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, extra, use_extra)

@@ -1,0 +1,245 @@
+"""Colliders: triangle meshes and analytic primitives the rods touch, and their packed tables.
+
+A :class:`Collider` is a handle returned by ``World.add_mesh`` / ``add_sphere`` / ``add_box`` /
+``add_capsule`` / ``add_cylinder``. Its pose and velocity may change between steps (co-simulation
+drives them); after each step it holds the reaction wrench the rods put on it. Mesh geometry and
+its BVH are built once, in the mesh's local frame.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Sequence
+
+import numpy as np
+
+from .. import validation as check
+from ..geometry.bvh import bvh_from_mesh, pseudonormals
+from .primitives import BOX, CAPSULE, CYLINDER, SPHERE
+from .segments import (
+    MESH,
+    N_PAR,
+    P_AUTO,
+    P_C,
+    P_K,
+    P_MUK,
+    P_MUS,
+    P_REPULSION,
+    P_SHAPE,
+    P_TWO_SIDED,
+)
+
+KINDS = {"mesh": MESH, "sphere": SPHERE, "box": BOX, "capsule": CAPSULE, "cylinder": CYLINDER}
+
+
+def load_mesh(mesh: Any) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Vertices (V, 3) m, faces (F, 3) and watertightness of a mesh given as a file path
+    (OBJ/STL/PLY/GLB...), a ``trimesh.Trimesh`` or a ``(vertices, faces)`` pair."""
+    import trimesh  # only needed here; the kernels take plain arrays
+
+    if isinstance(mesh, (str, os.PathLike)):
+        if not os.path.exists(mesh):
+            raise ValueError(f"mesh: file not found: {os.fspath(mesh)!r}")
+        mesh = trimesh.load(mesh, force="mesh")
+    if isinstance(mesh, trimesh.Trimesh):
+        tm = mesh
+    elif isinstance(mesh, (tuple, list)) and len(mesh) == 2:
+        V = np.asarray(mesh[0], dtype=np.float64)
+        F = np.asarray(mesh[1])
+        if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3:
+            raise ValueError("mesh: (vertices, faces) must have shapes (V, 3) and (F, 3), got "
+                             f"{V.shape} and {F.shape}")
+        tm = trimesh.Trimesh(V, F, process=False)
+    else:
+        raise ValueError("mesh must be a file path, a trimesh.Trimesh or a (vertices, faces) "
+                         f"pair, got {type(mesh).__name__}")
+    V = np.ascontiguousarray(tm.vertices, dtype=np.float64)
+    F = np.ascontiguousarray(tm.faces, dtype=np.int64)
+    if F.shape[0] == 0:
+        raise ValueError("mesh has no triangles")
+    return V, F, bool(tm.is_watertight)
+
+
+def pose_matrix(pose: Any, name: str = "pose") -> np.ndarray:
+    """A 4x4 world-from-local rigid transform from None (identity), a 4x4 matrix, a
+    ``(position, rotation 3x3)`` pair or a position 3-vector."""
+    if pose is None:
+        return np.eye(4)
+    if isinstance(pose, (tuple, list)) and len(pose) == 2:
+        T = np.eye(4)
+        T[:3, 3] = check.vector3(f"{name} position", pose[0])
+        T[:3, :3] = _rotation(pose[1], f"{name} rotation")
+        return T
+    arr = np.asarray(pose, dtype=np.float64)
+    if arr.shape == (3,):
+        T = np.eye(4)
+        T[:3, 3] = check.vector3(name, arr)
+        return T
+    if arr.shape != (4, 4) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be a finite 4x4 matrix, a (position, rotation) pair or a "
+                         f"position, got shape {arr.shape}")
+    T = arr.copy()
+    T[:3, :3] = _rotation(arr[:3, :3], f"{name} rotation")
+    T[3] = (0.0, 0.0, 0.0, 1.0)
+    return T
+
+
+def _rotation(R: Any, name: str) -> np.ndarray:
+    R = np.asarray(R, dtype=np.float64)
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        raise ValueError(f"{name} must be a finite 3x3 rotation matrix")
+    if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0.0:
+        raise ValueError(f"{name} must be a rotation matrix (orthonormal, det +1)")
+    return R
+
+
+class Collider:
+    """A mesh or primitive in the world. ``pose`` (4x4, world from local) and the velocity
+    (``set_velocity``) may be changed between steps; ``force`` (N) and ``torque`` (N m, about
+    the collider's origin), world frame, are the rods' reaction on it during the last step."""
+
+    def __init__(self, world, index: int, kind: str, pose: np.ndarray, params: np.ndarray,
+                 mesh: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+        self._world = world
+        self.index = index
+        self.kind = kind
+        self._pose = pose
+        self._twist = np.zeros(6)
+        self._params = params
+        self._mesh = mesh
+
+    @property
+    def pose(self) -> np.ndarray:
+        """World-from-local transform (4x4); assign a new one to move the collider."""
+        return self._pose.copy()
+
+    @pose.setter
+    def pose(self, value: Any) -> None:
+        self._pose[:] = pose_matrix(value)
+
+    def set_pose(self, position: Sequence[float] | None = None,
+                 rotation: np.ndarray | None = None) -> None:
+        """Move the collider: ``position`` (m) of its origin and/or ``rotation`` (3x3)."""
+        if position is not None:
+            self._pose[:3, 3] = check.vector3("position", position)
+        if rotation is not None:
+            self._pose[:3, :3] = _rotation(rotation, "rotation")
+
+    def set_velocity(self, linear: Sequence[float] = (0.0, 0.0, 0.0),
+                     angular: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+        """Velocity of the collider's origin (m/s) and angular velocity (rad/s), world frame,
+        used for contact damping and friction (the pose is not advanced by the world)."""
+        self._twist[:3] = check.vector3("linear", linear)
+        self._twist[3:] = check.vector3("angular", angular)
+
+    @property
+    def vertices(self) -> np.ndarray | None:
+        """Mesh vertices in the local frame (m); None for a primitive."""
+        return None if self._mesh is None else self._mesh[0]
+
+    @property
+    def faces(self) -> np.ndarray | None:
+        return None if self._mesh is None else self._mesh[1]
+
+    @property
+    def force(self) -> np.ndarray:
+        """Total contact force (N, world) of all rods on this collider in the last step."""
+        return self._world._collider_wrench(self.index)[:3]
+
+    @property
+    def torque(self) -> np.ndarray:
+        """Total contact torque (N m, world) about the collider's origin in the last step."""
+        return self._world._collider_wrench(self.index)[3:]
+
+    def __repr__(self) -> str:
+        extra = "" if self._mesh is None else f", {self._mesh[1].shape[0]} triangles"
+        return f"Collider({self.kind}{extra}, position={self._pose[:3, 3].round(4).tolist()})"
+
+
+def contact_params(stiffness: float | None, damping: float | None, friction: float | None,
+                   static_friction: float | None, kinetic_friction: float | None) -> np.ndarray:
+    """The parameter row shared by all colliders (validated); shape columns left zero."""
+    par = np.zeros(N_PAR)
+    par[P_AUTO] = 1.0 if stiffness is None else 0.0
+    par[P_K] = 0.0 if stiffness is None else check.positive("stiffness", stiffness, "N/m")
+    par[P_C] = -1.0 if damping is None else check.non_negative("damping", damping, "N s/m")
+    if friction is not None:
+        mu = check.non_negative("friction", friction)
+        mu_s = mu if static_friction is None else static_friction
+        mu_k = mu if kinetic_friction is None else kinetic_friction
+    else:
+        mu_s = 0.5 if static_friction is None else static_friction
+        mu_k = mu_s if kinetic_friction is None else kinetic_friction
+    par[P_MUS] = check.non_negative("static_friction", mu_s)
+    par[P_MUK] = check.non_negative("kinetic_friction", mu_k)
+    if par[P_MUK] > par[P_MUS]:
+        raise ValueError(f"kinetic_friction ({par[P_MUK]}) must be <= static_friction "
+                         f"({par[P_MUS]})")
+    return par
+
+
+def mesh_params(par: np.ndarray, watertight: bool, two_sided: bool | None,
+                repulsion_distance: float | None, size: float) -> np.ndarray:
+    """Mesh columns: two-sided unless closed (or as asked); repulsion depth (m, default 10 %
+    of the mesh's size)."""
+    if two_sided is None:
+        two_sided = not watertight
+    elif not two_sided and not watertight:
+        raise ValueError("two_sided=False needs a watertight (closed) mesh: an open mesh has "
+                         "no inside")
+    par[P_TWO_SIDED] = 1.0 if two_sided else 0.0
+    par[P_REPULSION] = (0.1 * size if repulsion_distance is None else
+                        check.non_negative("repulsion_distance", repulsion_distance, "m"))
+    return par
+
+
+def shape_params(par: np.ndarray, values: Sequence[float]) -> np.ndarray:
+    par[P_SHAPE:P_SHAPE + len(values)] = values
+    par[P_TWO_SIDED] = 0.0
+    return par
+
+
+def pack(colliders: Sequence[Collider]) -> tuple:
+    """The kernels' collider tables (see :mod:`deformx.engine.contact.segments`)."""
+    C = len(colliders)
+    kind = np.array([KINDS[c.kind] for c in colliders], dtype=np.int64)
+    pose = np.array([c._pose for c in colliders]).reshape(C, 4, 4)
+    twist = np.array([c._twist for c in colliders]).reshape(C, 6)
+    par = np.array([c._params for c in colliders]).reshape(C, N_PAR)
+    rng = np.zeros((C, 6), dtype=np.int64)
+    MV, MF, lo, hi, left, right, start, count, order, Fn, En, Vn = ([] for _ in range(12))
+    nv = nf = nb = 0
+    for i, c in enumerate(colliders):
+        if c._mesh is None:
+            rng[i] = (nv, nv, nf, nf, nb, nb)
+            continue
+        V, F = c._mesh
+        bvh = c._bvh
+        fn, en, vn = c._normals
+        rng[i] = (nv, nv + V.shape[0], nf, nf + F.shape[0], nb, nb + bvh.lo.shape[0])
+        MV.append(V)
+        MF.append(F)
+        for lst, arr in ((lo, bvh.lo), (hi, bvh.hi), (left, bvh.left), (right, bvh.right),
+                         (start, bvh.start), (count, bvh.count), (order, bvh.order),
+                         (Fn, fn), (En, en), (Vn, vn)):
+            lst.append(arr)
+        nv += V.shape[0]
+        nf += F.shape[0]
+        nb += bvh.lo.shape[0]
+
+    def cat(parts, shape, dtype=np.float64):
+        return np.ascontiguousarray(np.concatenate(parts) if parts else np.zeros(shape, dtype),
+                                    dtype=dtype)
+
+    i64 = np.int64
+    return (kind, pose, twist, par, rng, cat(MV, (0, 3)), cat(MF, (0, 3), i64), cat(lo, (0, 3)),
+            cat(hi, (0, 3)), cat(left, (0,), i64), cat(right, (0,), i64), cat(start, (0,), i64),
+            cat(count, (0,), i64), cat(order, (0,), i64), cat(Fn, (0, 3)), cat(En, (0, 3, 3)),
+            cat(Vn, (0, 3)))
+
+
+def prepare_mesh(collider: Collider) -> None:
+    """Build the BVH and pseudonormals of a mesh collider (once)."""
+    V, F = collider._mesh
+    collider._bvh = bvh_from_mesh(V, F)
+    collider._normals = pseudonormals(V, F)

@@ -1,0 +1,142 @@
+"""Analytic convex colliders in their local frame: signed distance and outward normal.
+
+Shapes are centred at the local origin; capsules and cylinders lie along the local z axis.
+The signed distance of a convex shape is a convex function, so along a rod segment it has one
+minimum: the deepest point of the segment is found by a golden-section search (exact closed
+forms for the sphere and capsule, whose distance is that to a point or a segment).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+SPHERE, BOX, CAPSULE, CYLINDER = 1, 2, 3, 4
+_GOLDEN = 0.6180339887498949
+_SEARCH_STEPS = 48  # golden-section steps: the bracket shrinks to 1e-10 of the segment
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _box_sdf(x, y, z, hx, hy, hz):
+    """Signed distance (m) and outward unit normal of a point to a box of half extents h."""
+    qx = abs(x) - hx
+    qy = abs(y) - hy
+    qz = abs(z) - hz
+    if qx <= 0.0 and qy <= 0.0 and qz <= 0.0:  # inside: the nearest face
+        if qx >= qy and qx >= qz:
+            return qx, math.copysign(1.0, x), 0.0, 0.0
+        if qy >= qz:
+            return qy, 0.0, math.copysign(1.0, y), 0.0
+        return qz, 0.0, 0.0, math.copysign(1.0, z)
+    ox = max(qx, 0.0)
+    oy = max(qy, 0.0)
+    oz = max(qz, 0.0)
+    d = math.sqrt(ox * ox + oy * oy + oz * oz)
+    return d, math.copysign(ox / d, x), math.copysign(oy / d, y), math.copysign(oz / d, z)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _cylinder_sdf(x, y, z, radius, half):
+    """Signed distance and outward normal to a capped cylinder along z."""
+    rho = math.sqrt(x * x + y * y)
+    if rho > 1e-300:
+        ux, uy = x / rho, y / rho
+    else:
+        ux, uy = 1.0, 0.0
+    qr = rho - radius
+    qz = abs(z) - half
+    sz = math.copysign(1.0, z)
+    if qr <= 0.0 and qz <= 0.0:
+        if qr >= qz:
+            return qr, ux, uy, 0.0
+        return qz, 0.0, 0.0, sz
+    orr = max(qr, 0.0)
+    oz = max(qz, 0.0)
+    d = math.sqrt(orr * orr + oz * oz)
+    return d, ux * orr / d, uy * orr / d, sz * oz / d
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _capsule_sdf(x, y, z, radius, half):
+    zc = min(max(z, -half), half)
+    dz = z - zc
+    d = math.sqrt(x * x + y * y + dz * dz)
+    if d > 1e-300:
+        return d - radius, x / d, y / d, dz / d
+    return -radius, 1.0, 0.0, 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def shape_sdf(kind, params, x, y, z):
+    """Signed distance (m, < 0 inside) and outward normal of local point (x, y, z).
+
+    ``params``: sphere (radius), box (hx, hy, hz), capsule / cylinder (radius, half length).
+    """
+    if kind == SPHERE:
+        d = math.sqrt(x * x + y * y + z * z)
+        if d > 1e-300:
+            return d - params[0], x / d, y / d, z / d
+        return -params[0], 0.0, 0.0, 1.0
+    if kind == BOX:
+        return _box_sdf(x, y, z, params[0], params[1], params[2])
+    if kind == CAPSULE:
+        return _capsule_sdf(x, y, z, params[0], params[1])
+    return _cylinder_sdf(x, y, z, params[0], params[1])
+
+
+@njit(cache=True, error_model="numpy")
+def segment_deepest(kind, params, a0, a1, a2, b0, b1, b2):
+    """Parameter s in [0, 1] of the point of local segment ab with the least signed distance."""
+    if kind == SPHERE or kind == CAPSULE:
+        # Distance to a point (sphere) or to the axis segment (capsule): closed form.
+        e0, e1, e2 = b0 - a0, b1 - a1, b2 - a2
+        ee = e0 * e0 + e1 * e1 + e2 * e2
+        if ee <= 0.0:
+            return 0.0
+        if kind == SPHERE:
+            return min(max(-(a0 * e0 + a1 * e1 + a2 * e2) / ee, 0.0), 1.0)
+        half = params[1]
+        # Closest points between ab and the axis (0, 0, -half)..(0, 0, half).
+        rz = a2 + half
+        ez = 2.0 * half
+        c = e2 * ez  # e . axis
+        f = rz * ez  # axis . (a - axis start)
+        zz = ez * ez
+        er = e0 * a0 + e1 * a1 + e2 * rz
+        denom = ee * zz - c * c
+        s = min(max((c * f - er * zz) / denom, 0.0), 1.0) if denom > 1e-300 * ee * zz else 0.0
+        t = (c * s + f) / zz if zz > 0.0 else 0.0
+        if t < 0.0:
+            s = min(max(-er / ee, 0.0), 1.0)
+        elif t > 1.0:
+            s = min(max((c - er) / ee, 0.0), 1.0)
+        return s
+    lo, hi = 0.0, 1.0
+    x1 = hi - _GOLDEN * (hi - lo)
+    x2 = lo + _GOLDEN * (hi - lo)
+    f1 = shape_sdf(kind, params, a0 + x1 * (b0 - a0), a1 + x1 * (b1 - a1), a2 + x1 * (b2 - a2))[0]
+    f2 = shape_sdf(kind, params, a0 + x2 * (b0 - a0), a1 + x2 * (b1 - a1), a2 + x2 * (b2 - a2))[0]
+    for _ in range(_SEARCH_STEPS):
+        if f1 <= f2:
+            hi = x2
+            x2, f2 = x1, f1
+            x1 = hi - _GOLDEN * (hi - lo)
+            f1 = shape_sdf(kind, params, a0 + x1 * (b0 - a0), a1 + x1 * (b1 - a1),
+                           a2 + x1 * (b2 - a2))[0]
+        else:
+            lo = x1
+            x1, f1 = x2, f2
+            x2 = lo + _GOLDEN * (hi - lo)
+            f2 = shape_sdf(kind, params, a0 + x2 * (b0 - a0), a1 + x2 * (b1 - a1),
+                           a2 + x2 * (b2 - a2))[0]
+    # The ends can be the minimum of a convex function that is flat there.
+    s = 0.5 * (lo + hi)
+    fs = shape_sdf(kind, params, a0 + s * (b0 - a0), a1 + s * (b1 - a1), a2 + s * (b2 - a2))[0]
+    fa = shape_sdf(kind, params, a0, a1, a2)[0]
+    fb = shape_sdf(kind, params, b0, b1, b2)[0]
+    if fa <= fs and fa <= fb:
+        return 0.0
+    if fb <= fs:
+        return 1.0
+    return s

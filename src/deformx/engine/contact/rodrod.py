@@ -1,0 +1,236 @@
+"""Rod-rod and self-contact between capsule segments: broad phase and penalty forces.
+
+Broad phase: sort-and-sweep of the segments' boxes along the axis of largest spread, padded by a
+skin, gives a Verlet list of candidate pairs that stays valid until some node has moved more
+than half the skin; cost grows ~linearly with the number of segments. Pairs of one rod closer
+along the rod than ``excluded`` segments (neighbours, and those that overlap in the straight
+rest shape because the radius exceeds the element length) are left out.
+
+Narrow phase: exact closest points of the two segment axes; penetration ``d = r_i + r_j - |p_i
+- p_j|`` gives ``N = k d - c v_n`` along the line of centres, and regularised Coulomb friction
+``min(mu N, c |v_t|)`` against the relative sliding velocity. Both forces act equal and opposite
+on the two contact points and are spread on the nodes with the segments' linear weights, so
+momentum is conserved exactly.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..geometry.closest import closest_segment_segment
+
+
+@njit(cache=True, error_model="numpy")
+def build_pairs(segs, seg_a, seg_b, seg_rod, seg_k, seg_ne, seg_closed, excluded, radius, pos,
+                pos2, skin, pairs):
+    """Candidate pairs among the segments ``segs`` whose padded boxes overlap at ``pos`` or
+    ``pos2``.
+
+    Segment (element) e joins nodes ``seg_a[e]``, ``seg_b[e]`` of rod ``seg_rod[e]`` (local
+    index ``seg_k[e]`` of ``seg_ne[e]`` elements, closed or not). Returns (pairs, count) with
+    pairs of element indices; ``pairs`` is grown (doubled) when full.
+    """
+    S = segs.shape[0]
+    lo = np.empty((S, 3))
+    hi = np.empty((S, 3))
+    for q in range(S):
+        i = segs[q]
+        a, b = seg_a[i], seg_b[i]
+        pad = radius[i] + 0.5 * skin
+        for d in range(3):
+            m = min(pos[a, d], pos[b, d], pos2[a, d], pos2[b, d])
+            M = max(pos[a, d], pos[b, d], pos2[a, d], pos2[b, d])
+            lo[q, d] = m - pad
+            hi[q, d] = M + pad
+    # Sweep along the axis where the boxes spread most.
+    axis = 0
+    best = -1.0
+    for d in range(3):
+        spread = lo[:, d].max() - lo[:, d].min()
+        if spread > best:
+            best = spread
+            axis = d
+    order = np.argsort(lo[:, axis])
+    count = 0
+    for oi in range(S):
+        qi = order[oi]
+        i = segs[qi]
+        for oj in range(oi + 1, S):
+            qj = order[oj]
+            j = segs[qj]
+            if lo[qj, axis] > hi[qi, axis]:
+                break
+            if (lo[qj, 0] > hi[qi, 0] or lo[qi, 0] > hi[qj, 0] or lo[qj, 1] > hi[qi, 1]
+                    or lo[qi, 1] > hi[qj, 1] or lo[qj, 2] > hi[qi, 2] or lo[qi, 2] > hi[qj, 2]):
+                continue
+            if seg_rod[i] == seg_rod[j]:
+                gap = abs(seg_k[i] - seg_k[j])
+                if seg_closed[i]:
+                    gap = min(gap, seg_ne[i] - gap)
+                if gap <= excluded[i]:
+                    continue
+            if count == pairs.shape[0]:
+                grown = np.empty((2 * pairs.shape[0] + 16, 2), dtype=np.int64)
+                grown[:count] = pairs[:count]
+                pairs = grown
+            pairs[count, 0] = min(i, j)
+            pairs[count, 1] = max(i, j)
+            count += 1
+    return pairs, count
+
+
+@njit(cache=True, error_model="numpy")
+def max_displacement(pos, ref, nodes) -> float:
+    """Largest distance (m) of the listed nodes from their positions at the last build."""
+    worst = 0.0
+    for i in nodes:
+        d = ((pos[i, 0] - ref[i, 0]) ** 2 + (pos[i, 1] - ref[i, 1]) ** 2
+             + (pos[i, 2] - ref[i, 2]) ** 2)
+        worst = max(worst, d)
+    return math.sqrt(worst)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def pair_penalty(m_i, m_j, k_floor, dt_ref, stiffness, damping):
+    """Penalty stiffness (N/m) and damping (N s/m) of one rod-rod contact (automatic when
+    ``stiffness`` < 0: contact frequency 0.2 / dt_ref for the lighter point, at least
+    ``k_floor``; critical damping of the reduced mass when ``damping`` < 0)."""
+    k = stiffness
+    if k < 0.0:
+        k = max(min(m_i, m_j) * (0.2 / dt_ref) ** 2, k_floor)
+    c = damping
+    if c < 0.0:
+        c = 2.0 * math.sqrt(k * m_i * m_j / (m_i + m_j))
+    return k, c
+
+
+@njit(cache=True, error_model="numpy")
+def pair_contact(i, j, seg_a, seg_b, radius, pos_i, pos_j, vel_i, vel_j, mass, node_kmin,
+                 dt_ref, stiffness, damping, mu):
+    """Contact of segments i (nodes at ``pos_i``) and j (``pos_j``): (touching, s, t, force
+    on i (lab, N), normal (j -> i), normal stiffness k + c/h split as (k, c))."""
+    a, b = seg_a[i], seg_b[i]
+    c_, d_ = seg_a[j], seg_b[j]
+    p0 = (pos_i[a, 0], pos_i[a, 1], pos_i[a, 2])
+    p1 = (pos_i[b, 0], pos_i[b, 1], pos_i[b, 2])
+    q0 = (pos_j[c_, 0], pos_j[c_, 1], pos_j[c_, 2])
+    q1 = (pos_j[d_, 0], pos_j[d_, 1], pos_j[d_, 2])
+    s, t = closest_segment_segment(p0, p1, q0, q1)
+    x0 = p0[0] + s * (p1[0] - p0[0]) - q0[0] - t * (q1[0] - q0[0])
+    x1 = p0[1] + s * (p1[1] - p0[1]) - q0[1] - t * (q1[1] - q0[1])
+    x2 = p0[2] + s * (p1[2] - p0[2]) - q0[2] - t * (q1[2] - q0[2])
+    dist = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    reach = radius[i] + radius[j]
+    zero = (0.0, 0.0, 0.0)
+    if dist >= reach or dist <= 1e-14 * reach:
+        return False, s, t, zero, zero, 0.0, 0.0
+    n = (x0 / dist, x1 / dist, x2 / dist)
+    m_i = (1.0 - s) * mass[a] + s * mass[b]
+    m_j = (1.0 - t) * mass[c_] + t * mass[d_]
+    k_floor = min((1.0 - s) * node_kmin[a] + s * node_kmin[b],
+                  (1.0 - t) * node_kmin[c_] + t * node_kmin[d_])
+    k, c = pair_penalty(m_i, m_j, k_floor, dt_ref, stiffness, damping)
+    u0 = (1.0 - s) * vel_i[a, 0] + s * vel_i[b, 0] - (1.0 - t) * vel_j[c_, 0] - t * vel_j[d_, 0]
+    u1 = (1.0 - s) * vel_i[a, 1] + s * vel_i[b, 1] - (1.0 - t) * vel_j[c_, 1] - t * vel_j[d_, 1]
+    u2 = (1.0 - s) * vel_i[a, 2] + s * vel_i[b, 2] - (1.0 - t) * vel_j[c_, 2] - t * vel_j[d_, 2]
+    un = u0 * n[0] + u1 * n[1] + u2 * n[2]
+    fn = k * (reach - dist) - c * un
+    if fn <= 0.0:
+        return False, s, t, zero, n, k, c
+    f0 = fn * n[0]
+    f1 = fn * n[1]
+    f2 = fn * n[2]
+    if mu > 0.0:
+        t0 = u0 - un * n[0]
+        t1 = u1 - un * n[1]
+        t2 = u2 - un * n[2]
+        tmag = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+        if tmag > 0.0:
+            ft = min(mu * fn, c * tmag) / tmag
+            f0 -= ft * t0
+            f1 -= ft * t1
+            f2 -= ft * t2
+    return True, s, t, (f0, f1, f2), n, k, c
+
+
+@njit(cache=True, error_model="numpy")
+def pair_forces(pairs, n_pairs, seg_a, seg_b, radius, pos, vel, mass, node_kmin, dt_ref,
+                stiffness, damping, mu, out) -> int:
+    """Equal and opposite forces of all touching pairs, added to ``out`` (N, per node);
+    returns the number of touching pairs."""
+    touching = 0
+    for p in range(n_pairs):
+        i, j = pairs[p, 0], pairs[p, 1]
+        hit, s, t, f, _, _, _ = pair_contact(i, j, seg_a, seg_b, radius, pos, pos, vel, vel, mass,
+                                             node_kmin, dt_ref, stiffness, damping, mu)
+        if not hit:
+            continue
+        touching += 1
+        a, b, c_, d_ = seg_a[i], seg_b[i], seg_a[j], seg_b[j]
+        for d in range(3):
+            out[a, d] += (1.0 - s) * f[d]
+            out[b, d] += s * f[d]
+            out[c_, d] -= (1.0 - t) * f[d]
+            out[d_, d] -= t * f[d]
+    return touching
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _spread(force, contact_force, a, b, s, f, sign):
+    for d in range(3):
+        force[a, d] += sign * (1.0 - s) * f[d]
+        force[b, d] += sign * s * f[d]
+        contact_force[a, d] += sign * (1.0 - s) * f[d]
+        contact_force[b, d] += sign * s * f[d]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _add_stiffness(el_K, e, s, kn, n):
+    for i in range(3):
+        for j in range(3):
+            kij = kn * n[i] * n[j]
+            el_K[e, 0, i, j] += (1.0 - s) * (1.0 - s) * kij
+            el_K[e, 1, i, j] += (1.0 - s) * s * kij
+            el_K[e, 2, i, j] += s * s * kij
+
+
+@njit(cache=True, error_model="numpy")
+def rod_pair_forces(r, pairs, n_pairs, seg_a, seg_b, seg_rod, radius, pos, vel, xp, vp, mass,
+                    node_kmin, dt_ref, h, rr, force, contact_force, el_K, want_K) -> int:
+    """Rod-rod contact forces on rod ``r`` for an implicit solve of that rod alone.
+
+    Its own segments are at the iterate (``pos``, ``vel``); other rods' segments at their
+    predicted positions ``xp`` and velocities ``vp`` for this step (each rod gets its share of
+    a pair when it is solved). Self-contact pairs act on both of their segments. With
+    ``want_K`` the normal stiffness ``k + c / h`` of each contact is added to ``el_K``.
+    """
+    touching = 0
+    for p in range(n_pairs):
+        i, j = pairs[p, 0], pairs[p, 1]
+        ri, rj = seg_rod[i], seg_rod[j]
+        if ri != r and rj != r:
+            continue
+        if ri == rj:
+            hit, s, t, f, n, k, c = pair_contact(i, j, seg_a, seg_b, radius, pos, pos, vel, vel,
+                                                 mass, node_kmin, dt_ref, rr[0], rr[1], rr[2])
+            if not hit:
+                continue
+            _spread(force, contact_force, seg_a[i], seg_b[i], s, f, 1.0)
+            _spread(force, contact_force, seg_a[j], seg_b[j], t, f, -1.0)
+            if want_K:
+                _add_stiffness(el_K, i, s, k + c / h, n)
+                _add_stiffness(el_K, j, t, k + c / h, n)
+        else:
+            own, other = (i, j) if ri == r else (j, i)
+            hit, s, t, f, n, k, c = pair_contact(own, other, seg_a, seg_b, radius, pos, xp, vel,
+                                                 vp, mass, node_kmin, dt_ref, rr[0], rr[1], rr[2])
+            if not hit:
+                continue
+            _spread(force, contact_force, seg_a[own], seg_b[own], s, f, 1.0)
+            if want_K:
+                _add_stiffness(el_K, own, s, k + c / h, n)
+        touching += 1
+    return touching

@@ -1,0 +1,364 @@
+"""Contact of rod segments (capsules) with meshes and analytic primitives: force and stiffness.
+
+Rod points are spheres (nodes) and capsules (elements) of the rod radius. Against every
+collider the kernel finds closest points: exact point- and segment-triangle closest points through
+the mesh's BVH, or the convex signed distance of a primitive. A penetration ``d > 0`` gives the
+penalty normal force ``N = k d - c v_n``. Nodes carry the contact of a rope lying on a surface;
+a segment adds the part of its deepest penetration that its nodes do not account for (a sharp
+edge or a thin plate between two nodes), spread on its nodes with the linear weights of the
+contact point, so a rope cannot slip between its nodes through a thin plate or edge.
+
+Friction is a spring-slider (Cundall & Strack): an anchor fixed on the collider (in its local
+frame, so it moves with it) pulls the contact point back with stiffness ``k``; above ``mu_s N``
+it slides with ``mu_k N`` and the anchor trails it. A static load below the limit holds with a
+bounded elastic shift and no creep. One anchor per node and per element (for its first
+collider); a point touching further colliders at once gets rate-regularised kinetic friction.
+
+Every force is also summed, with opposite sign, into the collider's wrench (force, torque about
+its origin, world frame). For the stable integrator the kernel also returns the contact
+stiffness per element as three 3x3 blocks (node a-a, b-a, b-b).
+
+Collider tables (see :mod:`deformx.engine.contact.colliders`):
+``kind (C,)``, ``pose (C, 4, 4)`` world-from-local, ``twist (C, 6)`` (linear velocity of the
+origin, angular velocity; world frame), ``par (C, 12)`` (stiffness, damping, mu_s, mu_k, auto,
+two_sided, repulsion, shape parameters x3, unused x2) and the packed meshes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..geometry.bvh import bvh_closest_segment, signed_side
+from .primitives import segment_deepest, shape_sdf
+
+MESH = 0
+# par columns
+P_K, P_C, P_MUS, P_MUK, P_AUTO, P_TWO_SIDED, P_REPULSION, P_SHAPE = 0, 1, 2, 3, 4, 5, 6, 7
+N_PAR = 12
+_TINY = 1e-12  # m: below this a closest-point normal is undefined (segment crosses a face)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _to_local(pose, c, x0, x1, x2):
+    y0 = x0 - pose[c, 0, 3]
+    y1 = x1 - pose[c, 1, 3]
+    y2 = x2 - pose[c, 2, 3]
+    return (pose[c, 0, 0] * y0 + pose[c, 1, 0] * y1 + pose[c, 2, 0] * y2,
+            pose[c, 0, 1] * y0 + pose[c, 1, 1] * y1 + pose[c, 2, 1] * y2,
+            pose[c, 0, 2] * y0 + pose[c, 1, 2] * y1 + pose[c, 2, 2] * y2)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _rotate(pose, c, x0, x1, x2):
+    return (pose[c, 0, 0] * x0 + pose[c, 0, 1] * x1 + pose[c, 0, 2] * x2,
+            pose[c, 1, 0] * x0 + pose[c, 1, 1] * x1 + pose[c, 1, 2] * x2,
+            pose[c, 2, 0] * x0 + pose[c, 2, 1] * x1 + pose[c, 2, 2] * x2)
+
+
+@njit(cache=True, error_model="numpy")
+def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
+             Border, Fn, En, Vn, pa, pb, reach):
+    """Deepest point of world segment pa-pb against collider ``c`` within ``reach`` (m).
+
+    Returns (hit, s, signed distance of the segment axis, normal (world), surface point
+    (world)); hit is False when the segment is farther than ``reach``.
+    """
+    la = _to_local(pose, c, pa[0], pa[1], pa[2])
+    lb = _to_local(pose, c, pb[0], pb[1], pb[2])
+    if kind == MESH:
+        v0, v1, f0, f1, b0, b1 = (mesh_rng[c, 0], mesh_rng[c, 1], mesh_rng[c, 2], mesh_rng[c, 3],
+                                  mesh_rng[c, 4], mesh_rng[c, 5])
+        faces = MF[f0:f1]
+        verts = MV[v0:v1]
+        tri, s, u, v, w, d2 = bvh_closest_segment(
+            Blo[b0:b1], Bhi[b0:b1], Bleft[b0:b1], Bright[b0:b1], Bstart[b0:b1], Bcount[b0:b1],
+            Border[f0:f1], verts, faces, la, lb, reach + par[c, P_REPULSION])
+        if tri < 0:
+            return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+        ia, ib, ic = faces[tri, 0], faces[tri, 1], faces[tri, 2]
+        q = (u * verts[ia, 0] + v * verts[ib, 0] + w * verts[ic, 0],
+             u * verts[ia, 1] + v * verts[ib, 1] + w * verts[ic, 1],
+             u * verts[ia, 2] + v * verts[ib, 2] + w * verts[ic, 2])
+        p = (la[0] + s * (lb[0] - la[0]), la[1] + s * (lb[1] - la[1]), la[2] + s * (lb[2] - la[2]))
+        dist = math.sqrt(d2)
+        fn = Fn[f0 + tri]
+        if dist > _TINY:
+            n = ((p[0] - q[0]) / dist, (p[1] - q[1]) / dist, (p[2] - q[2]) / dist)
+            sd = dist
+            if par[c, P_TWO_SIDED] == 0.0:
+                if signed_side(Fn[f0:f1], En[f0:f1], Vn[v0:v1], faces, tri, u, v, w, p, q) < 0.0:
+                    # Inside a closed mesh: push out the nearest way.
+                    n = (-n[0], -n[1], -n[2])
+                    sd = -dist
+            elif dist > reach:
+                return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+        else:  # the axis crosses a face: push along its normal (outward for a closed mesh)
+            n = (fn[0], fn[1], fn[2])
+            sd = 0.0
+            if par[c, P_TWO_SIDED] != 0.0:
+                # Two-sided: back to the side the segment's far end is on.
+                far = lb if s < 0.5 else la
+                side = (far[0] - q[0]) * n[0] + (far[1] - q[1]) * n[1] + (far[2] - q[2]) * n[2]
+                if side > 0.0:
+                    n = (-n[0], -n[1], -n[2])
+        if sd > reach:
+            return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+        nw = _rotate(pose, c, n[0], n[1], n[2])
+        qw = _rotate(pose, c, q[0], q[1], q[2])
+        return True, s, sd, nw, (qw[0] + pose[c, 0, 3], qw[1] + pose[c, 1, 3], qw[2] + pose[c, 2, 3])
+    shape = par[c, P_SHAPE:P_SHAPE + 3]
+    s = segment_deepest(kind, shape, la[0], la[1], la[2], lb[0], lb[1], lb[2])
+    p0 = la[0] + s * (lb[0] - la[0])
+    p1 = la[1] + s * (lb[1] - la[1])
+    p2 = la[2] + s * (lb[2] - la[2])
+    sd, n0, n1, n2 = shape_sdf(kind, shape, p0, p1, p2)
+    if sd > reach:
+        return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+    nw = _rotate(pose, c, n0, n1, n2)
+    qw = _rotate(pose, c, p0 - sd * n0, p1 - sd * n1, p2 - sd * n2)
+    return True, s, sd, nw, (qw[0] + pose[c, 0, 3], qw[1] + pose[c, 1, 3], qw[2] + pose[c, 2, 3])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def collider_penalty(par, c, mass, k_floor, dt_ref):
+    """Penalty stiffness (N/m) and damping (N s/m) of collider ``c`` for a contact of ``mass``:
+    automatic (contact frequency 0.2 / dt_ref, at least ``k_floor``, critically damped) or the
+    user's values."""
+    k = par[c, P_K]
+    if par[c, P_AUTO] > 0.0:
+        k = max(mass * (0.2 / dt_ref) ** 2, k_floor)
+    damp = par[c, P_C]
+    if damp < 0.0:
+        damp = 2.0 * math.sqrt(k * mass)
+    return k, damp
+
+
+@njit(cache=True, error_model="numpy")
+def _one_contact(r, c, pose, twist, par, p, u, n, q, depth, m_c, k_floor, dt_ref, h, x_ref0,
+                 anchor, anchor_col, slot, use_anchor, commit, wrench):
+    """Force (N, world) of one contact of penetration ``depth`` at point ``p`` moving with
+    ``u`` against collider ``c`` (normal ``n``, surface point ``q``), the normal stiffness
+    ``k + c / h`` and the tangential one (0 when sliding); adds the reaction to ``wrench``.
+
+    With ``use_anchor`` the friction is the anchored spring-slider of anchor ``slot``
+    (``x_ref0``: where a new contact anchors); otherwise rate-regularised kinetic friction.
+    """
+    kc, cc = collider_penalty(par, c, m_c, k_floor, dt_ref)
+    rx = q[0] - pose[c, 0, 3]
+    ry = q[1] - pose[c, 1, 3]
+    rz = q[2] - pose[c, 2, 3]
+    # Relative velocity of the rod's point and the collider's surface point.
+    u0 = u[0] - (twist[c, 0] + twist[c, 4] * rz - twist[c, 5] * ry)
+    u1 = u[1] - (twist[c, 1] + twist[c, 5] * rx - twist[c, 3] * rz)
+    u2 = u[2] - (twist[c, 2] + twist[c, 3] * ry - twist[c, 4] * rx)
+    un = u0 * n[0] + u1 * n[1] + u2 * n[2]
+    fn = kc * depth - cc * un
+    if fn <= 0.0:
+        return False, (0.0, 0.0, 0.0), 0.0, 0.0
+    f0 = fn * n[0]
+    f1 = fn * n[1]
+    f2 = fn * n[2]
+    mu_s = par[c, P_MUS]
+    mu_k = par[c, P_MUK]
+    kt = 0.0
+    if mu_s > 0.0 or mu_k > 0.0:
+        t0 = u0 - un * n[0]
+        t1 = u1 - un * n[1]
+        t2 = u2 - un * n[2]
+        if use_anchor:
+            if anchor_col[slot] == c:
+                A = _rotate(pose, c, anchor[slot, 0], anchor[slot, 1], anchor[slot, 2])
+                A0 = A[0] + pose[c, 0, 3]
+                A1 = A[1] + pose[c, 1, 3]
+                A2 = A[2] + pose[c, 2, 3]
+            else:  # touching down: anchor where the point started the step
+                A0, A1, A2 = x_ref0[0], x_ref0[1], x_ref0[2]
+            d0 = p[0] - A0
+            d1 = p[1] - A1
+            d2 = p[2] - A2
+            dn = d0 * n[0] + d1 * n[1] + d2 * n[2]
+            # Sticking: the spring plus critical damping of the tangential velocity.
+            s0 = kc * (d0 - dn * n[0]) + cc * t0
+            s1 = kc * (d1 - dn * n[1]) + cc * t1
+            s2 = kc * (d2 - dn * n[2]) + cc * t2
+            smag = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+            if smag <= mu_s * fn:
+                kt = kc + cc / h
+                f0 -= s0
+                f1 -= s1
+                f2 -= s2
+            else:  # sliding against the trial force; the anchor trails at mu_k N
+                back = mu_k * fn / smag
+                f0 -= back * s0
+                f1 -= back * s1
+                f2 -= back * s2
+                back /= kc
+                A0 = p[0] - back * s0
+                A1 = p[1] - back * s1
+                A2 = p[2] - back * s2
+            if commit:
+                anchor_col[slot] = c
+                loc = _to_local(pose, c, A0, A1, A2)
+                anchor[slot, 0] = loc[0]
+                anchor[slot, 1] = loc[1]
+                anchor[slot, 2] = loc[2]
+        else:
+            tmag = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+            if tmag > 0.0:
+                ft = min(mu_k * fn, cc * tmag) / tmag
+                f0 -= ft * t0
+                f1 -= ft * t1
+                f2 -= ft * t2
+    # Reaction on the collider: -f at the surface point, torque about its origin.
+    wrench[r, c, 0] -= f0
+    wrench[r, c, 1] -= f1
+    wrench[r, c, 2] -= f2
+    wrench[r, c, 3] -= ry * f2 - rz * f1
+    wrench[r, c, 4] -= rz * f0 - rx * f2
+    wrench[r, c, 5] -= rx * f1 - ry * f0
+    return True, (f0, f1, f2), kc + cc / h, kt
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _add_K(el_K, e, q, w, kn, kt, n):
+    for i in range(3):
+        for j in range(3):
+            el_K[e, q, i, j] += w * ((kn - kt) * n[i] * n[j] + (kt if i == j else 0.0))
+
+
+@njit(cache=True, error_model="numpy")
+def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, node_radius,
+                          node_kmin, cols, anchor, anchor_col, pen, el_K, wrench, force,
+                          contact_force, commit, want_K) -> int:
+    """Add the contact forces of rod ``r`` with every collider; returns the contact count.
+
+    Two kinds of contact, so that a lying rope is supported evenly and a thin edge between two
+    nodes still holds it: node spheres (radius of the rod), with the anchored spring-slider
+    friction; and, per segment, the part of the segment's deepest penetration that exceeds
+    the linear interpolation of its nodes' penetrations (zero on a flat face, all of it on a
+    sharp edge or thin plate under the segment, or a chord of a curved surface). Each node and
+    each element has one friction anchor (slots ``i`` and ``N + e`` of ``anchor`` (N + E, 4):
+    the point in the collider frame and, for elements, the segment parameter it holds).
+
+    ``vel`` are node velocities (m/s) for damping and friction; ``x_ref`` where a new contact
+    anchors (the step start for the stable integrator). ``want_K`` adds the contact
+    stiffness (damping as ``c / h``, ``h`` in s) to ``el_K`` (per element: node blocks a-a,
+    b-a, b-b); ``commit`` stores the friction anchors (once per accepted step). ``pen`` (N, C)
+    is scratch; ``wrench[r]`` is overwritten with the reactions.
+    """
+    (kind, pose, twist, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
+     Border, Fn, En, Vn) = cols
+    n_col = kind.shape[0]
+    n_nodes = pos.shape[0]
+    for c in range(n_col):
+        for j in range(6):
+            wrench[r, c, j] = 0.0
+    count = 0
+    for k in range(nn):
+        i = n0 + k
+        radius = node_radius[i]
+        p = (pos[i, 0], pos[i, 1], pos[i, 2])
+        u = (vel[i, 0], vel[i, 1], vel[i, 2])
+        anchored = False
+        for c in range(n_col):
+            pen[i, c] = -1e30
+            hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft,
+                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, p, p, radius)
+            if not hit:
+                continue
+            pen[i, c] = radius - sd
+            if pen[i, c] <= 0.0:
+                continue
+            use_anchor = not anchored and (anchor_col[i] == c or anchor_col[i] < 0)
+            on, f, kn, kt = _one_contact(r, c, pose, twist, par, p, u, n, q, pen[i, c], mass[i],
+                                         node_kmin[i], dt_ref, h,
+                                         (x_ref[i, 0], x_ref[i, 1], x_ref[i, 2]), anchor,
+                                         anchor_col, i, use_anchor, commit, wrench)
+            if not on:
+                continue
+            anchored = anchored or use_anchor
+            count += 1
+            for d in range(3):
+                force[i, d] += f[d]
+                contact_force[i, d] += f[d]
+            if want_K:  # the node's diagonal block lives in an adjacent element's a-a / b-b
+                if k < ne:
+                    _add_K(el_K, e0 + k, 0, 1.0, kn, kt, n)
+                else:
+                    _add_K(el_K, e0 + ne - 1, 2, 1.0, kn, kt, n)
+        if commit and not anchored:
+            anchor_col[i] = -1
+    for k in range(ne):
+        e = e0 + k
+        a = n0 + k
+        b = a + 1 if k + 1 < nn else n0
+        radius = 0.5 * (node_radius[a] + node_radius[b])
+        pa = (pos[a, 0], pos[a, 1], pos[a, 2])
+        pb = (pos[b, 0], pos[b, 1], pos[b, 2])
+        anchored = False
+        for c in range(n_col):
+            hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft,
+                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, pa, pb, radius)
+            if not hit or s <= 0.0 or s >= 1.0:
+                continue
+            wa = 1.0 - s
+            wb = s
+            excess = radius - sd - max(wa * pen[a, c] + wb * pen[b, c], 0.0)
+            if excess <= 0.0:
+                continue
+            p = (wa * pa[0] + wb * pb[0], wa * pa[1] + wb * pb[1], wa * pa[2] + wb * pb[2])
+            u = (wa * vel[a, 0] + wb * vel[b, 0], wa * vel[a, 1] + wb * vel[b, 1],
+                 wa * vel[a, 2] + wb * vel[b, 2])
+            slot = n_nodes + e  # element anchors follow the node anchors
+            use_anchor = not anchored and (anchor_col[slot] == c or anchor_col[slot] < 0)
+            # Friction holds the material point of the segment where the contact began (on a
+            # curved surface the deepest point stays put while the rope slides through it).
+            sa = anchor[slot, 3] if (use_anchor and anchor_col[slot] == c) else s
+            ta = 1.0 - sa
+            pm = (ta * pa[0] + sa * pb[0], ta * pa[1] + sa * pb[1], ta * pa[2] + sa * pb[2])
+            x0 = (ta * x_ref[a, 0] + sa * x_ref[b, 0], ta * x_ref[a, 1] + sa * x_ref[b, 1],
+                  ta * x_ref[a, 2] + sa * x_ref[b, 2])
+            on, f, kn, kt = _one_contact(r, c, pose, twist, par, pm, u, n, q, excess,
+                                         wa * mass[a] + wb * mass[b],
+                                         wa * node_kmin[a] + wb * node_kmin[b], dt_ref, h, x0,
+                                         anchor, anchor_col, slot, use_anchor, commit, wrench)
+            if not on:
+                continue
+            if commit and use_anchor:
+                anchor[slot, 3] = sa
+            anchored = anchored or use_anchor
+            count += 1
+            # Normal force at the deepest point, friction at the anchored material point.
+            fn = f[0] * n[0] + f[1] * n[1] + f[2] * n[2]
+            for d in range(3):
+                ft = f[d] - fn * n[d]
+                fa = wa * fn * n[d] + ta * ft
+                fb = wb * fn * n[d] + sa * ft
+                force[a, d] += fa
+                force[b, d] += fb
+                contact_force[a, d] += fa
+                contact_force[b, d] += fb
+            if want_K:
+                _add_K(el_K, e, 0, wa * wa, kn, 0.0, n)
+                _add_K(el_K, e, 1, wa * wb, kn, 0.0, n)
+                _add_K(el_K, e, 2, wb * wb, kn, 0.0, n)
+                if kt > 0.0:
+                    _add_K(el_K, e, 0, ta * ta, 0.0, kt, n)
+                    _add_K(el_K, e, 1, ta * sa, 0.0, kt, n)
+                    _add_K(el_K, e, 2, sa * sa, 0.0, kt, n)
+        if commit and not anchored:
+            anchor_col[n_nodes + e] = -1
+    return count
+
+
+def empty_colliders() -> tuple:
+    """Collider tables of a world without meshes or primitives (the kernels' no-op input)."""
+    return (np.zeros(0, dtype=np.int64), np.zeros((0, 4, 4)), np.zeros((0, 6)),
+            np.zeros((0, N_PAR)), np.zeros((0, 6), dtype=np.int64), np.zeros((0, 3)),
+            np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3)),
+            np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
+            np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
+            np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))

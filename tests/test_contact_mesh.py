@@ -1,0 +1,175 @@
+"""Mesh contact: thin plates, floors, slopes, reactions; both integrators.
+
+References: statics (the contact force carries the weight), Coulomb's law on a slope
+(hold below the friction angle, slide with a = g (sin t - mu_k cos t) above it), Newton's third
+law (the mesh's reaction is minus the rods' contact force) and geometry (segment-to-plate
+distances from the box's exact distance function, sampled densely along each segment).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+import deformx as dx
+
+G = 9.81
+SETUPS = {"verlet": 2e-5, "stable": 1e-3}  # integrator: dt (s)
+
+
+def rope(n: int, start, direction=(1.0, 0.0, 0.0), dl: float = 0.01, radius: float = 0.002,
+         E: float = 1e6, damping: float = 2.0) -> dx.Rod:
+    return dx.Rod.straight(n_elements=n, start=start, direction=direction, length=n * dl,
+                           radius=radius, youngs_modulus=E, density=1000.0, damping=damping)
+
+
+def grid_floor(size: float = 1.0, n: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """An open square grid mesh at z = 0 (2 n^2 triangles)."""
+    xs = np.linspace(-size / 2, size / 2, n + 1)
+    X, Y = np.meshgrid(xs, xs, indexing="ij")
+    V = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    F = np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+    return V, F
+
+
+def segment_box_distances(half: np.ndarray, pos: np.ndarray, samples: int = 41) -> np.ndarray:
+    """Signed distance (m) of each segment axis to a centred box of half extents ``half``,
+    by dense sampling along the segment and the box's exact distance function (independent
+    of DeformX's mesh geometry)."""
+    t = np.linspace(0.0, 1.0, samples)[None, :, None]
+    pts = pos[:-1, None, :] * (1 - t) + pos[1:, None, :] * t
+    q = np.abs(pts) - half
+    d = np.linalg.norm(np.maximum(q, 0.0), axis=2) + np.minimum(q.max(axis=2), 0.0)
+    return d.min(axis=1)
+
+
+@pytest.mark.parametrize("integrator", sorted(SETUPS))
+def test_rope_drapes_over_thin_plate_and_never_passes_through(integrator):
+    """1 cm elements, 2 mm radius, a 2 mm thick plate: node spheres alone would straddle it."""
+    plate = trimesh.creation.box(extents=(0.002, 0.4, 0.2))  # top edge at z = 0.1
+    world = dx.World(dt=SETUPS[integrator], integrator=integrator)
+    # Nodes at x = +-0.005, ... : the plate (|x| <= 1 mm) lies between two nodes.
+    rod = world.add_rod(rope(30, start=(-0.15, 0.0, 0.108), damping=5.0))
+    mesh = world.add_mesh(plate, friction=0.3)
+    worst = np.inf
+    for _ in range(40):
+        world.run(0.025)
+        d = segment_box_distances(np.array([0.001, 0.2, 0.1]), rod.positions)
+        worst = min(worst, d.min())
+    r = 0.002
+    # Capsules may sink into the plate by the penalty's small elastic compression only.
+    assert worst >= 0.9 * r, f"a segment came {worst * 1e3:.3f} mm from the plate (r = 2 mm)"
+    x = rod.positions
+    mid = np.argmin(np.abs(x[:, 0]))
+    assert x[mid, 2] > 0.1, "the rope's middle fell below the top edge"
+    assert x[0, 2] < 0.06 and x[-1, 2] < 0.06, "the rope did not drape down both sides"
+    assert np.sign(x[0, 0]) != np.sign(x[-1, 0]), "the rope slid off to one side"
+    # Hanging at rest: the plate carries the whole weight.
+    world.run(1.0)
+    assert mesh.force[2] == pytest.approx(-rod.mass * G, rel=0.01)
+
+
+@pytest.mark.parametrize("integrator", sorted(SETUPS))
+def test_rope_on_mesh_floor_weight_is_carried(integrator):
+    V, F = grid_floor(1.0, 40)  # 3200 triangles, open: two-sided
+    world = dx.World(dt=SETUPS[integrator], integrator=integrator)
+    rod = world.add_rod(rope(40, start=(-0.2, 0.013, 0.01)))
+    floor = world.add_mesh((V, F), friction=0.5)
+    world.run(0.6)
+    W = rod.mass * G
+    total = world.contact_forces(rod).sum(axis=0)
+    assert total[2] == pytest.approx(W, rel=0.01)
+    assert np.abs(total[:2]).max() < 1e-3 * W
+    assert rod.positions[:, 2] == pytest.approx(0.002, abs=0.1 * 0.002)
+    # Reaction: the floor feels minus what the rod feels (Newton's third law).
+    np.testing.assert_allclose(floor.force, -total, rtol=1e-9, atol=1e-12 * W)
+
+
+def slope_world(angle_deg: float, integrator: str, mu: float = 0.5):
+    """A rope lying along the fall line of a tilted box mesh."""
+    th = math.radians(angle_deg)
+    R = np.array([[math.cos(th), 0.0, math.sin(th)], [0.0, 1.0, 0.0],
+                  [-math.sin(th), 0.0, math.cos(th)]])  # about y: local +x points downhill
+    down = R @ np.array([1.0, 0.0, 0.0])
+    normal = R @ np.array([0.0, 0.0, 1.0])
+    box = trimesh.creation.box(extents=(2.0, 0.5, 0.1))  # top face through the origin
+    world = dx.World(dt=SETUPS[integrator], integrator=integrator)
+    slope = world.add_mesh(box, pose=(-0.05 * normal, R), friction=mu)
+    start = -0.1 * down + 0.002 * normal
+    rod = world.add_rod(rope(20, start=start, direction=down, E=1e6, damping=0.0))
+    return world, rod, slope, down, normal
+
+
+@pytest.mark.parametrize("integrator", sorted(SETUPS))
+def test_static_friction_holds_on_mesh_slope_below_the_limit(integrator):
+    world, rod, _, down, _ = slope_world(20.0, integrator)  # tan 20 deg = 0.36 < 0.5
+    world.run(0.2)
+    x0 = rod.positions.copy()
+    world.run(0.5)
+    drift = np.abs((rod.positions - x0) @ down).max()
+    assert drift < 1e-5, f"the rope crept {drift:.2e} m down a slope below the friction angle"
+
+
+@pytest.mark.parametrize("integrator", sorted(SETUPS))
+def test_rope_slides_on_mesh_slope_above_the_limit(integrator):
+    angle, mu = 40.0, 0.5  # tan 40 deg = 0.84 > 0.5
+    world, rod, _, down, _ = slope_world(angle, integrator, mu)
+    world.run(0.1)
+    s0, t0 = rod.positions.mean(axis=0) @ down, world.time
+    v0 = rod.velocities.mean(axis=0) @ down
+    world.run(0.2)
+    s1, t1 = rod.positions.mean(axis=0) @ down, world.time
+    th = math.radians(angle)
+    a = G * (math.sin(th) - mu * math.cos(th))
+    expected = v0 * (t1 - t0) + 0.5 * a * (t1 - t0) ** 2
+    assert s1 - s0 == pytest.approx(expected, rel=0.03)
+
+
+@pytest.mark.parametrize("integrator", sorted(SETUPS))
+def test_reaction_wrench_is_minus_the_contact_force_on_the_rods(integrator):
+    """Two ropes draped over a sphere-like mesh: force and torque balance."""
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.05)
+    world = dx.World(dt=SETUPS[integrator], integrator=integrator)
+    a = world.add_rod(rope(20, start=(-0.1, 0.012, 0.053)))
+    b = world.add_rod(rope(20, start=(-0.09, -0.015, 0.06), direction=(1.0, 0.1, 0.0)))
+    center = np.array([0.003, -0.002, 0.0])
+    ball = world.add_mesh(sphere, pose=center, friction=0.4)
+    world.run(0.15)
+    for _ in range(3):
+        world.run(0.01)
+        f_rods = sum(world.contact_forces(r).sum(axis=0) for r in (a, b))
+        assert np.linalg.norm(f_rods) > 0.1 * (a.mass + b.mass) * G  # they are touching
+        np.testing.assert_allclose(ball.force, -f_rods, rtol=1e-9, atol=1e-12)
+        # Torque about the mesh origin: forces act at the surface points, within a rod
+        # radius of the nodes.
+        tau_nodes = sum(np.cross(r.positions - center, world.contact_forces(r)).sum(axis=0)
+                        for r in (a, b))
+        bound = 0.002 * sum(np.abs(world.contact_forces(r)).sum() for r in (a, b))
+        assert np.linalg.norm(ball.torque + tau_nodes) <= bound
+
+
+def test_mesh_input_validation(tmp_path):
+    world = dx.World()
+    with pytest.raises(ValueError, match="mesh"):
+        world.add_mesh("no/such/file.obj")
+    with pytest.raises(ValueError, match="mesh"):
+        world.add_mesh((np.zeros((3, 2)), np.array([[0, 1, 2]])))
+    with pytest.raises(ValueError, match="mesh"):
+        world.add_mesh(42)
+    with pytest.raises(ValueError, match="two_sided"):
+        V, F = grid_floor(1.0, 2)
+        world.add_mesh((V, F), two_sided=False)
+    with pytest.raises(ValueError, match="pose"):
+        world.add_mesh(trimesh.creation.box(), pose=np.ones((3, 3)))
+    with pytest.raises(ValueError, match="kinetic_friction"):
+        world.add_mesh(trimesh.creation.box(), static_friction=0.2, kinetic_friction=0.3)
+    # A mesh file round trip (STL through trimesh).
+    path = tmp_path / "box.stl"
+    trimesh.creation.box(extents=(0.1, 0.1, 0.1)).export(path)
+    c = world.add_mesh(path)
+    assert c.faces.shape == (12, 3) and c.kind == "mesh"
