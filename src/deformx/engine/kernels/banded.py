@@ -29,7 +29,8 @@ def _load(A, I, d):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _store(A, I, d, m) -> None:
+def store_block(A, I, d, m) -> None:
+    """A[I, d] <- the block ``m`` (row-major tuple)."""
     A[I, d, 0, 0], A[I, d, 0, 1], A[I, d, 0, 2] = m[0], m[1], m[2]
     A[I, d, 1, 0], A[I, d, 1, 1], A[I, d, 1, 2] = m[3], m[4], m[5]
     A[I, d, 2, 0], A[I, d, 2, 1], A[I, d, 2, 2] = m[6], m[7], m[8]
@@ -40,6 +41,17 @@ def _load_lower(A, I):
     """Lower triangle of the diagonal block A[I, 0]: (00, 10, 11, 20, 21, 22)."""
     return (A[I, 0, 0, 0], A[I, 0, 1, 0], A[I, 0, 1, 1], A[I, 0, 2, 0], A[I, 0, 2, 1],
             A[I, 0, 2, 2])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def add_lower(A, I, s) -> None:
+    """A[I, 0] += ``s`` on the lower triangle (``s`` as in :func:`_load_lower`)."""
+    A[I, 0, 0, 0] += s[0]
+    A[I, 0, 1, 0] += s[1]
+    A[I, 0, 1, 1] += s[2]
+    A[I, 0, 2, 0] += s[3]
+    A[I, 0, 2, 1] += s[4]
+    A[I, 0, 2, 2] += s[5]
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -106,7 +118,7 @@ def _chol3_inverse(s):
 @njit(cache=True, inline="always", error_model="numpy")
 def _store_inverse(A, I, li) -> None:
     """Store an inverse lower Cholesky block (as in :func:`_load_lower`) in A[I, 0], in full."""
-    _store(A, I, 0, (li[0], 0.0, 0.0, li[1], li[2], 0.0, li[3], li[4], li[5]))
+    store_block(A, I, 0, (li[0], 0.0, 0.0, li[1], li[2], 0.0, li[3], li[4], li[5]))
 
 
 @njit(cache=True, error_model="numpy")
@@ -127,7 +139,7 @@ def block_cholesky(A, nb) -> int:
         return 0
     # L[1, 0] = A[1, 0] L[0, 0]^-T
     l1 = _times_inv_t(_load(A, 1, 1), li2)
-    _store(A, 1, 1, l1)
+    store_block(A, 1, 1, l1)
     ok, li1 = _chol3_inverse(_sub_aat(_load_lower(A, 1), l1))
     if not ok:
         return 2
@@ -137,8 +149,8 @@ def block_cholesky(A, nb) -> int:
         l2 = _times_inv_t(_load(A, I, 2), li2)
         # L[I, I-1] = (A[I, I-1] - L[I, I-2] L[I-1, I-2]^T) L[I-1, I-1]^-T
         l1 = _times_inv_t(_sub_abt(_load(A, I, 1), l2, l1), li1)
-        _store(A, I, 2, l2)
-        _store(A, I, 1, l1)
+        store_block(A, I, 2, l2)
+        store_block(A, I, 1, l1)
         # Pivot block A[I, I] - L[I, I-1] L[I, I-1]^T - L[I, I-2] L[I, I-2]^T, lower triangle.
         ok, li = _chol3_inverse(_sub_aat(_sub_aat(_load_lower(A, I), l1), l2))
         if not ok:
