@@ -30,7 +30,7 @@ from numba import njit
 from ..contact.plane import plane_penalty
 from ..contact.rodrod import rod_pair_forces
 from ..contact.segments import rod_collider_contacts
-from .banded import BLOCK_BAND, block_cholesky, block_solve
+from .banded import BLOCK_BAND, add_lower, block_cholesky, block_solve, store_block
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
 from .verlet import OK, _check, _constrain_values
@@ -46,50 +46,75 @@ MAX_REFINE = 64.0  # a step is halved at most down to dt / MAX_REFINE before giv
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _add_block(A, I, J, M, transpose):
-    """Add the 3x3 block ``M`` (or ``M^T``) at block row ``I``, block column ``J``.
+def _add_block(A, I, J, m):
+    """Add the 3x3 block ``m`` (row-major tuple) at block row ``I``, block column ``J``.
 
     Blocks above the diagonal are stored as their transposes below it; a block farther from
     the diagonal than the band (the wrap-around coupling of a closed rod) is left out, which
-    makes the matrix an approximate Newton matrix for that rod.
+    makes the matrix an approximate Newton matrix for that rod. Only used for the couplings
+    of a closed rod's last element and Voronoi domain, which may wrap around.
     """
-    if I < J:
+    transpose = I < J
+    if transpose:
         I, J = J, I
-        transpose = not transpose
     d = I - J
     if d > BLOCK_BAND:
         return
     for i in range(3):
         for j in range(3):
-            A[I, d, i, j] += M[j, i] if transpose else M[i, j]
+            A[I, d, i, j] += m[3 * j + i] if transpose else m[3 * i + j]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _qsq(Q, e, i, j, s0, s1, s2):
+    """Entry (i, j) of Q[e]^T diag(s) Q[e]."""
+    return Q[e, 0, i] * s0 * Q[e, 0, j] + Q[e, 1, i] * s1 * Q[e, 1, j] + Q[e, 2, i] * s2 * Q[e, 2, j]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _rel(Q, ea, eb, i, m):
+    """Entry (i, m) of Q[eb] Q[ea]^T."""
+    return Q[eb, i, 0] * Q[ea, m, 0] + Q[eb, i, 1] * Q[ea, m, 1] + Q[eb, i, 2] * Q[ea, m, 2]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _rtbr(R, i, m, b0, b1, b2):
+    """Entry (i, m) of R^T diag(b) R, ``R`` a row-major tuple."""
+    return R[i] * b0 * R[m] + R[3 + i] * b1 * R[3 + m] + R[6 + i] * b2 * R[6 + m]
 
 
 @njit(cache=True, error_model="numpy")
 def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B, rest_vor,
-              mass, J, nu, kv, geometric, A, M, K):
+              mass, J, nu, kv, geometric, A):
     """Newton matrix of one rod into ``A`` (block band); returns the number of block rows.
 
     ``kv`` = 1 + (Kelvin-Voigt retardation time) / h scales the elastic stiffness. The stress
     (geometric) terms are added for elements in tension only, and only with ``geometric``:
     in compression they can make the matrix indefinite (buckling), and Gauss-Newton alone is
     positive definite by construction.
+
+    Every block of the band is written directly (no zeroing pass), of the diagonal blocks only
+    the lower triangle (all that the factorisation reads). Element k couples node blocks 2k,
+    2k + 2 and rotation block 2k + 1; Voronoi domain j couples rotation blocks 2j + 1, 2j + 3.
+    The sums are formed in the same order as by accumulating each term into a zeroed band.
     """
     nb = 2 * ne + (0 if closed else 1)
-    A[:nb] = 0.0
-    for i in range(nn):
-        c = mass[n0 + i] * (1.0 / (h * h) + nu / h)
-        for d in range(3):
-            A[2 * i, 0, d, d] += c
+    zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    store_block(A, 0, 1, zero)  # blocks before the first column: unused
+    store_block(A, 0, 2, zero)
+    store_block(A, 1, 2, zero)
+    cm = 1.0 / (h * h) + nu / h
+    cx = mass[n0] * cm
+    # Lower triangle of node block 2k's diagonal before element k's term: mass + element k - 1.
+    xdiag = (cx, 0.0, cx, 0.0, 0.0, cx)
     for k in range(ne):
         e = e0 + k
         ia = n0 + k
-        ib = ia + 1 if k + 1 < nn else n0
+        wrap = k + 1 == nn  # a closed rod's last element ends at node 0
+        ib = n0 if wrap else ia + 1
         bx = 2 * k
         bphi = 2 * k + 1
-        by = 2 * k + 2 if k + 1 < nn else 0
-        c = (1.0 / (h * h) + nu / h) / dil[e]
-        for d in range(3):
-            A[bphi, 0, d, d] += J[e, d] * c
+        by = 0 if wrap else 2 * k + 2
         l0 = rest_len[e]
         # a = Q dx / l0 (stretch times material tangent), n = material stress.
         dx0 = pos[ib, 0] - pos[ia, 0]
@@ -103,16 +128,12 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
             n0_, n1_, n2_ = 0.0, 0.0, 0.0
         Sk0, Sk1, Sk2 = S[e, 0] * kv, S[e, 1] * kv, S[e, 2] * kv
         # Node-node: Q^T S Q / l0 (exact: sigma is linear in positions at fixed frames).
-        for i in range(3):
-            for j in range(3):
-                K[i, j] = (Q[e, 0, i] * Sk0 * Q[e, 0, j] + Q[e, 1, i] * Sk1 * Q[e, 1, j]
-                           + Q[e, 2, i] * Sk2 * Q[e, 2, j]) / l0
-        _add_block(A, bx, bx, K, False)
-        _add_block(A, by, by, K, False)
-        for i in range(3):
-            for j in range(3):
-                M[i, j] = -K[i, j]
-        _add_block(A, by, bx, M, False)
+        K = (_qsq(Q, e, 0, 0, Sk0, Sk1, Sk2) / l0, _qsq(Q, e, 0, 1, Sk0, Sk1, Sk2) / l0,
+             _qsq(Q, e, 0, 2, Sk0, Sk1, Sk2) / l0, _qsq(Q, e, 1, 0, Sk0, Sk1, Sk2) / l0,
+             _qsq(Q, e, 1, 1, Sk0, Sk1, Sk2) / l0, _qsq(Q, e, 1, 2, Sk0, Sk1, Sk2) / l0,
+             _qsq(Q, e, 2, 0, Sk0, Sk1, Sk2) / l0, _qsq(Q, e, 2, 1, Sk0, Sk1, Sk2) / l0,
+             _qsq(Q, e, 2, 2, Sk0, Sk1, Sk2) / l0)
+        minus_K = (-K[0], -K[1], -K[2], -K[3], -K[4], -K[5], -K[6], -K[7], -K[8])
         # Node-rotation: H(x_b, phi) = Q^T C with C = S [a] - [n]; H(x_a, phi) = -H(x_b, phi).
         c01 = -Sk0 * a2 + n2_
         c02 = Sk0 * a1 - n1_
@@ -120,24 +141,39 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
         c12 = -Sk1 * a0 + n0_
         c20 = -Sk2 * a1 + n1_
         c21 = Sk2 * a0 - n0_
-        for i in range(3):
-            q0, q1, q2 = Q[e, 0, i], Q[e, 1, i], Q[e, 2, i]
-            M[i, 0] = q1 * c10 + q2 * c20
-            M[i, 1] = q0 * c01 + q2 * c21
-            M[i, 2] = q0 * c02 + q1 * c12
-            for j in range(3):
-                K[i, j] = -M[i, j]
-        _add_block(A, by, bphi, M, False)
-        _add_block(A, bx, bphi, K, False)
-        # Rotation-rotation: l0 ([a]^T S [a] + sym(n a^T) - (n . a) I).
+        H = (Q[e, 1, 0] * c10 + Q[e, 2, 0] * c20, Q[e, 0, 0] * c01 + Q[e, 2, 0] * c21,
+             Q[e, 0, 0] * c02 + Q[e, 1, 0] * c12,
+             Q[e, 1, 1] * c10 + Q[e, 2, 1] * c20, Q[e, 0, 1] * c01 + Q[e, 2, 1] * c21,
+             Q[e, 0, 1] * c02 + Q[e, 1, 1] * c12,
+             Q[e, 1, 2] * c10 + Q[e, 2, 2] * c20, Q[e, 0, 2] * c01 + Q[e, 2, 2] * c21,
+             Q[e, 0, 2] * c02 + Q[e, 1, 2] * c12)
+        # Rotation-rotation: l0 ([a]^T S [a] + sym(n a^T) - (n . a) I), plus the inertia.
         na = n0_ * a0 + n1_ * a1 + n2_ * a2
-        K[0, 0] = l0 * (Sk1 * a2 * a2 + Sk2 * a1 * a1 + n0_ * a0 - na)
-        K[1, 1] = l0 * (Sk0 * a2 * a2 + Sk2 * a0 * a0 + n1_ * a1 - na)
-        K[2, 2] = l0 * (Sk0 * a1 * a1 + Sk1 * a0 * a0 + n2_ * a2 - na)
-        K[0, 1] = K[1, 0] = l0 * (-Sk2 * a0 * a1 + 0.5 * (n0_ * a1 + a0 * n1_))
-        K[0, 2] = K[2, 0] = l0 * (-Sk1 * a0 * a2 + 0.5 * (n0_ * a2 + a0 * n2_))
-        K[1, 2] = K[2, 1] = l0 * (-Sk0 * a1 * a2 + 0.5 * (n1_ * a2 + a1 * n2_))
-        _add_block(A, bphi, bphi, K, False)
+        ci = cm / dil[e]
+        rdiag = (J[e, 0] * ci + l0 * (Sk1 * a2 * a2 + Sk2 * a1 * a1 + n0_ * a0 - na),
+                 l0 * (-Sk2 * a0 * a1 + 0.5 * (n0_ * a1 + a0 * n1_)),
+                 J[e, 1] * ci + l0 * (Sk0 * a2 * a2 + Sk2 * a0 * a0 + n1_ * a1 - na),
+                 l0 * (-Sk1 * a0 * a2 + 0.5 * (n0_ * a2 + a0 * n2_)),
+                 l0 * (-Sk0 * a1 * a2 + 0.5 * (n1_ * a2 + a1 * n2_)),
+                 J[e, 2] * ci + l0 * (Sk0 * a1 * a1 + Sk1 * a0 * a0 + n2_ * a2 - na))
+        store_block(A, bx, 0, (xdiag[0] + K[0], 0.0, 0.0, xdiag[1] + K[3], xdiag[2] + K[4], 0.0,
+                               xdiag[3] + K[6], xdiag[4] + K[7], xdiag[5] + K[8]))
+        store_block(A, bphi, 0, (rdiag[0], 0.0, 0.0, rdiag[1], rdiag[2], 0.0,
+                                 rdiag[3], rdiag[4], rdiag[5]))
+        # (phi, x_a) = -H^T
+        store_block(A, bphi, 1, (-H[0], -H[3], -H[6], -H[1], -H[4], -H[7], -H[2], -H[5], -H[8]))
+        if wrap:
+            _add_block(A, by, by, K)
+            _add_block(A, by, bx, minus_K)
+            _add_block(A, by, bphi, H)
+        else:
+            store_block(A, by, 1, H)  # (x_b, phi)
+            store_block(A, by, 2, minus_K)  # (x_b, x_a)
+            cx = mass[ib] * cm
+            xdiag = (cx + K[0], K[3], cx + K[4], K[6], K[7], cx + K[8])
+    if not closed:
+        store_block(A, nb - 1, 0, (xdiag[0], 0.0, 0.0, xdiag[1], xdiag[2], 0.0,
+                                   xdiag[3], xdiag[4], xdiag[5]))
     # Bend / twist, Gauss-Newton: kappa ~ (phi_b - R phi_a) / rvl with R = Q_b Q_a^T.
     nv = ne if closed else ne - 1
     for j in range(nv):
@@ -145,25 +181,26 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
         eb = ea + 1 if j + 1 < ne else e0
         vj = v0 + j
         inv = kv / rest_vor[vj]
-        for i in range(3):
-            for m in range(3):
-                M[i, m] = (Q[eb, i, 0] * Q[ea, m, 0] + Q[eb, i, 1] * Q[ea, m, 1]
-                           + Q[eb, i, 2] * Q[ea, m, 2])
-        for i in range(3):
-            for m in range(3):
-                K[i, m] = (M[0, i] * B[vj, 0] * M[0, m] + M[1, i] * B[vj, 1] * M[1, m]
-                           + M[2, i] * B[vj, 2] * M[2, m]) * inv
+        R = (_rel(Q, ea, eb, 0, 0), _rel(Q, ea, eb, 0, 1), _rel(Q, ea, eb, 0, 2),
+             _rel(Q, ea, eb, 1, 0), _rel(Q, ea, eb, 1, 1), _rel(Q, ea, eb, 1, 2),
+             _rel(Q, ea, eb, 2, 0), _rel(Q, ea, eb, 2, 1), _rel(Q, ea, eb, 2, 2))
+        b0, b1, b2 = B[vj, 0], B[vj, 1], B[vj, 2]
         ba = 2 * j + 1
         bb = 2 * (j + 1) + 1 if j + 1 < ne else 1
-        _add_block(A, ba, ba, K, False)
-        for i in range(3):
-            for m in range(3):
-                K[i, m] = B[vj, i] * inv if i == m else 0.0
-        _add_block(A, bb, bb, K, False)
-        for i in range(3):
-            for m in range(3):
-                K[i, m] = -B[vj, i] * M[i, m] * inv
-        _add_block(A, bb, ba, K, False)
+        # (phi_a, phi_a) = R^T B R / rvl, (phi_b, phi_b) = B / rvl, (phi_b, phi_a) = -B R / rvl
+        add_lower(A, ba, (_rtbr(R, 0, 0, b0, b1, b2) * inv, _rtbr(R, 1, 0, b0, b1, b2) * inv,
+                          _rtbr(R, 1, 1, b0, b1, b2) * inv, _rtbr(R, 2, 0, b0, b1, b2) * inv,
+                          _rtbr(R, 2, 1, b0, b1, b2) * inv, _rtbr(R, 2, 2, b0, b1, b2) * inv))
+        A[bb, 0, 0, 0] += b0 * inv
+        A[bb, 0, 1, 1] += b1 * inv
+        A[bb, 0, 2, 2] += b2 * inv
+        BR = (-b0 * R[0] * inv, -b0 * R[1] * inv, -b0 * R[2] * inv,
+              -b1 * R[3] * inv, -b1 * R[4] * inv, -b1 * R[5] * inv,
+              -b2 * R[6] * inv, -b2 * R[7] * inv, -b2 * R[8] * inv)
+        if bb == ba + 2:
+            store_block(A, bb, 2, BR)
+        else:  # a closed rod's last domain
+            _add_block(A, bb, ba, BR)
     return nb
 
 
@@ -345,10 +382,19 @@ def _add_element_stiffness(A, e0, ne, nn, el_K):
     for k in range(ne):
         e = e0 + k
         ba = 2 * k
-        bb = 2 * k + 2 if k + 1 < nn else 0
-        _add_block(A, ba, ba, el_K[e, 0], False)
-        _add_block(A, bb, bb, el_K[e, 2], False)
-        _add_block(A, bb, ba, el_K[e, 1], False)
+        for i in range(3):
+            for j in range(3):
+                A[ba, 0, i, j] += el_K[e, 0, i, j]
+        if k + 1 < nn:
+            bb = ba + 2
+            for i in range(3):
+                for j in range(3):
+                    A[bb, 0, i, j] += el_K[e, 2, i, j]
+                    A[bb, 2, i, j] += el_K[e, 1, i, j]
+        else:  # a closed rod's last element: node b is node 0, its a-b coupling is off-band
+            for i in range(3):
+                for j in range(3):
+                    A[0, 0, i, j] += el_K[e, 2, i, j]
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -396,8 +442,6 @@ def advance_rod_implicit(
     A = np.zeros((nb, BLOCK_BAND + 1, 3, 3))
     rhs = np.zeros((nb, 3))
     fixed = np.zeros(nb, dtype=np.bool_)
-    M = np.empty((3, 3))
-    K = np.empty((3, 3))
     no_band = np.zeros((0, BLOCK_BAND + 1, 3, 3))
     has_planes = planes.shape[0] > 0
     n_cols = cols[0].shape[0]
@@ -540,7 +584,7 @@ def advance_rod_implicit(
                 if not refactor:
                     break
                 _assemble(hs, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B,
-                          rest_vor, mass, J, nu, kv, geometric, A, M, K)
+                          rest_vor, mass, J, nu, kv, geometric, A)
                 if has_planes:
                     _contacts(ITERATE, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
                               anchor_on, c_plane, c_stick, c_dir, force, contact_force, A, False)
