@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import SimulationDiverged
 from . import validation as check
 from .contact import colliders as col
-from .contact.segments import empty_colliders
+from .contact.segments import empty_colliders, query_cache
 from .kernels import coupled, implicit, verlet
 from .layout import Block
 from .rod import Rod
@@ -255,7 +255,8 @@ class World:
         """Collider tables, per-element contact state and the rod-rod segment tables."""
         b = self._block
         E, N = b.Q.shape[0], b.pos.shape[0]
-        self._cols = col.pack(self._colliders) if self._colliders else empty_colliders()
+        self._cols = (col.pack(self._colliders) + query_cache(N + E) if self._colliders
+                      else empty_colliders())
         if getattr(self, "_col_anchor", None) is None or self._col_anchor.shape[0] != N + E:
             # Friction anchors of nodes, then elements (collider frame) and their colliders.
             self._col_anchor = np.zeros((N + E, 4))

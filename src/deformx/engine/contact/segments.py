@@ -21,7 +21,8 @@ stiffness per element as three 3x3 blocks (node a-a, b-a, b-b).
 Collider tables (see :mod:`deformx.engine.contact.colliders`):
 ``kind (C,)``, ``pose (C, 4, 4)`` world-from-local, ``twist (C, 6)`` (linear velocity of the
 origin, angular velocity; world frame), ``par (C, 12)`` (stiffness, damping, mu_s, mu_k, auto,
-two_sided, repulsion, shape parameters x3, unused x2) and the packed meshes.
+two_sided, repulsion, shape parameters x3, unused x2), the packed meshes and the per-query
+caches of nearby triangles (see ``_mesh_nearest``).
 """
 
 from __future__ import annotations
@@ -31,13 +32,15 @@ import math
 import numpy as np
 from numba import njit
 
-from ..geometry.bvh import bvh_closest_segment, signed_side
+from ..geometry.bvh import bvh_closest_segment, bvh_collect_segment, signed_side
+from ..geometry.closest import bary_point, closest_segment_triangle, dist2, lerp
 from .primitives import segment_deepest, shape_sdf
 
 MESH = 0
 # par columns
 P_K, P_C, P_MUS, P_MUK, P_AUTO, P_TWO_SIDED, P_REPULSION, P_SHAPE = 0, 1, 2, 3, 4, 5, 6, 7
 N_PAR = 12
+QUERY_CACHE = 48  # triangles kept per query; more nearby and the query walks the BVH each time
 _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment crosses a face)
 
 
@@ -59,12 +62,61 @@ def _rotate(pose, c, x0, x1, x2):
 
 
 @njit(cache=True, error_model="numpy")
+def _mesh_nearest(c, slot, lo, hi, left, right, start, count, order, verts, faces, la, lb, reach,
+                  skin, qc_col, qc_pos, qc_tris, qc_n):
+    """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache.
+
+    The cache holds the triangles that may lie within ``reach + skin`` of where the slot's
+    segment was when it was filled; it stays exact while both ends move less than ``skin``, so
+    most steps test a handful of triangles instead of walking the BVH. Also returns whether
+    the cache was (re)filled or bypassed on this call.
+    """
+    moved = 0.0
+    fresh = False
+    if qc_col[slot] == c:
+        for d in range(3):
+            moved = max(moved, abs(la[d] - qc_pos[slot, d]), abs(lb[d] - qc_pos[slot, 3 + d]))
+    if qc_col[slot] != c or moved * math.sqrt(3.0) > skin:
+        n = bvh_collect_segment(lo, hi, left, right, start, count, order, verts, faces, la, lb,
+                                reach + skin, qc_tris[slot])
+        if n < 0:  # too many triangles nearby to cache: search the tree every time
+            qc_col[slot] = -1
+            tri, s, u, v, w, d2 = bvh_closest_segment(lo, hi, left, right, start, count, order,
+                                                      verts, faces, la, lb, reach)
+            return tri, s, u, v, w, d2, True
+        fresh = True
+        qc_col[slot] = c
+        qc_n[slot] = n
+        for d in range(3):
+            qc_pos[slot, d] = la[d]
+            qc_pos[slot, 3 + d] = lb[d]
+    best = reach * reach
+    tri = -1
+    rs = ru = rv = rw = 0.0
+    for k in range(qc_n[slot]):
+        f = qc_tris[slot, k]
+        va = (verts[faces[f, 0], 0], verts[faces[f, 0], 1], verts[faces[f, 0], 2])
+        vb = (verts[faces[f, 1], 0], verts[faces[f, 1], 1], verts[faces[f, 1], 2])
+        vc = (verts[faces[f, 2], 0], verts[faces[f, 2], 1], verts[faces[f, 2], 2])
+        s, u, v, w = closest_segment_triangle(la, lb, va, vb, vc)
+        d2 = dist2(lerp(la, lb, s), bary_point(va, vb, vc, u, v, w))
+        if d2 < best or (tri < 0 and d2 <= best):
+            best = d2
+            tri = f
+            rs, ru, rv, rw = s, u, v, w
+    if tri < 0:
+        return -1, 0.0, 0.0, 0.0, 0.0, np.inf, fresh
+    return tri, rs, ru, rv, rw, best, fresh
+
+
+@njit(cache=True, error_model="numpy")
 def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-             Border, Fn, En, Vn, pa, pb, reach):
+             Border, Fn, En, Vn, qcache, slot, pa, pb, reach):
     """Deepest point of world segment pa-pb against collider ``c`` within ``reach`` (m).
 
     Returns (hit, s, signed distance of the segment axis, normal (world), surface point
-    (world)); hit is False when the segment is farther than ``reach``.
+    (world)); hit is False when the segment is farther than ``reach``. ``slot`` names the
+    query (node i or element N + e) in the mesh query cache ``qcache``.
     """
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
@@ -73,9 +125,31 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
                                   mesh_rng[c, 4], mesh_rng[c, 5])
         faces = MF[f0:f1]
         verts = MV[v0:v1]
-        tri, s, u, v, w, d2 = bvh_closest_segment(
-            Blo[b0:b1], Bhi[b0:b1], Bleft[b0:b1], Bright[b0:b1], Bstart[b0:b1], Bcount[b0:b1],
-            Border[f0:f1], verts, faces, la, lb, reach + par[c, P_REPULSION])
+        qc_col, qc_pos, qc_tris, qc_n = qcache
+        lo, hi, left, right = Blo[b0:b1], Bhi[b0:b1], Bleft[b0:b1], Bright[b0:b1]
+        start, count, order = Bstart[b0:b1], Bcount[b0:b1], Border[f0:f1]
+        tri, s, u, v, w, d2, fresh = _mesh_nearest(c, slot, lo, hi, left, right, start, count,
+                                                   order, verts, faces, la, lb, reach,
+                                                   0.5 * reach, qc_col, qc_pos, qc_tris, qc_n)
+        if tri < 0 and fresh and par[c, P_TWO_SIDED] == 0.0 and par[c, P_REPULSION] > 0.0:
+            # Nothing near the surface: the segment may still be inside a closed mesh, less
+            # than the repulsion distance deep (checked when the cache is refilled, or on
+            # every call while it is inside).
+            tri, s, u, v, w, d2 = bvh_closest_segment(lo, hi, left, right, start, count, order,
+                                                      verts, faces, la, lb,
+                                                      reach + par[c, P_REPULSION])
+            if tri >= 0:
+                p = lerp(la, lb, s)
+                q = bary_point((verts[faces[tri, 0], 0], verts[faces[tri, 0], 1],
+                                verts[faces[tri, 0], 2]),
+                               (verts[faces[tri, 1], 0], verts[faces[tri, 1], 1],
+                                verts[faces[tri, 1], 2]),
+                               (verts[faces[tri, 2], 0], verts[faces[tri, 2], 1],
+                                verts[faces[tri, 2], 2]), u, v, w)
+                if signed_side(Fn[f0:f1], En[f0:f1], Vn[v0:v1], faces, tri, u, v, w, p, q) > 0.0:
+                    tri = -1  # outside and clear of the surface
+                else:
+                    qc_col[slot] = -1  # deep inside: search afresh until it is out
         if tri < 0:
             return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
         ia, ib, ic = faces[tri, 0], faces[tri, 1], faces[tri, 2]
@@ -250,7 +324,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
     (kind, pose, twist, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-     Border, Fn, En, Vn) = cols
+     Border, Fn, En, Vn, qc_col, qc_pos, qc_tris, qc_n) = cols
+    qcache = (qc_col, qc_pos, qc_tris, qc_n)
     n_col = kind.shape[0]
     n_nodes = pos.shape[0]
     for c in range(n_col):
@@ -266,7 +341,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         for c in range(n_col):
             pen[i, c] = -1e30
             hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft,
-                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, p, p, radius)
+                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, qcache, i,
+                                        p, p, radius)
             if not hit:
                 continue
             pen[i, c] = radius - sd
@@ -301,7 +377,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         anchored = False
         for c in range(n_col):
             hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft,
-                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, pa, pb, radius)
+                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, qcache,
+                                        n_nodes + e, pa, pb, radius)
             if not hit or s <= 0.0 or s >= 1.0:
                 continue
             wa = 1.0 - s
@@ -361,4 +438,11 @@ def empty_colliders() -> tuple:
             np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3)),
             np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
             np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
-            np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)))
+            np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)),
+            *query_cache(0))
+
+
+def query_cache(n_slots: int) -> tuple:
+    """Empty mesh query caches for ``n_slots`` queries (nodes, then elements)."""
+    return (np.full(n_slots, -1, dtype=np.int64), np.zeros((n_slots, 6)),
+            np.zeros((n_slots, QUERY_CACHE), dtype=np.int64), np.zeros(n_slots, dtype=np.int64))

@@ -383,3 +383,53 @@ def signed_side(face_n, edge_n, vertex_n, faces, tri, u, v, w, p, c) -> float:
         n2 = face_n[tri, 2]
     d = (p[0] - c[0]) * n0 + (p[1] - c[1]) * n1 + (p[2] - c[2]) * n2
     return math.copysign(1.0, d) if d != 0.0 else 1.0
+
+
+@njit(cache=True, error_model="numpy")
+def bvh_collect_segment(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
+                        max_dist, out) -> int:
+    """Triangles that may lie within ``max_dist`` (m) of segment p0p1, written to ``out``.
+
+    A superset by cheap bounds (node and triangle boxes, the triangle's bounding sphere), so a
+    caller can keep the list while the segment moves less than the slack it asked for and test
+    only these triangles exactly. Returns the count, or -1 if ``out`` is too small.
+    """
+    slo = (min(p0[0], p1[0]), min(p0[1], p1[1]), min(p0[2], p1[2]))
+    shi = (max(p0[0], p1[0]), max(p0[1], p1[1]), max(p0[2], p1[2]))
+    reach = max_dist * max_dist
+    stack = np.empty(_STACK, dtype=np.int64)
+    n = 0
+    sp = 0
+    if _box_gap2(lo, hi, 0, slo, shi) <= reach:
+        stack[0] = 0
+        sp = 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        a = left[node]
+        if a < 0:
+            for i in range(start[node], start[node] + count[node]):
+                f = order[i]
+                va = (vertices[faces[f, 0], 0], vertices[faces[f, 0], 1], vertices[faces[f, 0], 2])
+                vb = (vertices[faces[f, 1], 0], vertices[faces[f, 1], 1], vertices[faces[f, 1], 2])
+                vc = (vertices[faces[f, 2], 0], vertices[faces[f, 2], 1], vertices[faces[f, 2], 2])
+                g = _gap2(min(va[0], vb[0], vc[0]), max(va[0], vb[0], vc[0]), slo[0], shi[0])
+                g += _gap2(min(va[1], vb[1], vc[1]), max(va[1], vb[1], vc[1]), slo[1], shi[1])
+                g += _gap2(min(va[2], vb[2], vc[2]), max(va[2], vb[2], vc[2]), slo[2], shi[2])
+                if g > reach:
+                    continue
+                cen = bary_point(va, vb, vc, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)
+                rad = math.sqrt(max(dist2(cen, va), dist2(cen, vb), dist2(cen, vc)))
+                gap = math.sqrt(dist2(lerp(p0, p1, closest_point_segment(cen, p0, p1)), cen)) - rad
+                if gap > 0.0 and gap * gap > reach:
+                    continue
+                if n == out.shape[0]:
+                    return -1
+                out[n] = f
+                n += 1
+            continue
+        for child in (a, right[node]):
+            if _box_gap2(lo, hi, child, slo, shi) <= reach:
+                stack[sp] = child
+                sp += 1
+    return n
