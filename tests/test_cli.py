@@ -198,3 +198,24 @@ def test_version_and_python_dash_m():
                           timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert "demo" in proc.stdout and "bench" in proc.stdout
+
+
+def test_scene_with_colliders_runs_and_names_bad_fields(tmp_path):
+    """examples/scenes/rope_on_shapes.yaml: a mesh file (relative path), a cylinder, rods."""
+    from deformx.scenes import build_world
+
+    scene = load_scene(REPO / "examples" / "scenes" / "rope_on_shapes.yaml")
+    world, rods = build_world(scene)
+    assert [c.kind for c in world.colliders] == ["mesh", "cylinder"]
+    world.run(0.4)
+    weight = sum(r.mass for r in rods) * 9.81
+    load = sum(-c.force[2] for c in world.colliders)
+    assert 0.1 * weight < load < 2.0 * weight  # the ropes landed on the plate and the bar
+    data = yaml.safe_load((REPO / "examples" / "scenes" / "rope_on_shapes.yaml").read_text())
+    data["colliders"][1].pop("radius")
+    with pytest.raises(ValueError, match="colliders.1"):
+        parse_scene(data)
+    data = yaml.safe_load((REPO / "examples" / "scenes" / "rope_on_shapes.yaml").read_text())
+    data["colliders"][0]["path"] = "missing.stl"
+    with pytest.raises(ValueError, match=r"colliders\[0\].*not found"):
+        build_world(parse_scene(data), base_dir=REPO / "examples" / "scenes")

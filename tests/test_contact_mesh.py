@@ -173,3 +173,48 @@ def test_mesh_input_validation(tmp_path):
     trimesh.creation.box(extents=(0.1, 0.1, 0.1)).export(path)
     c = world.add_mesh(path)
     assert c.faces.shape == (12, 3) and c.kind == "mesh"
+
+
+@pytest.mark.parametrize("integrator", sorted(SETUPS))
+def test_moving_mesh_carries_a_rope_by_friction(integrator):
+    """A platform driven between steps (pose and velocity) carries the rope lying on it."""
+    box = trimesh.creation.box(extents=(0.6, 0.3, 0.02))  # top face at z = 0.01
+    world = dx.World(dt=SETUPS[integrator], integrator=integrator)
+    rod = world.add_rod(rope(20, start=(-0.1, 0.0, 0.012)))
+    platform = world.add_mesh(box, friction=0.8)
+    world.run(0.1)  # settle
+    x0 = rod.positions.mean(axis=0)
+    v = np.array([0.2, 0.1, 0.0])  # m/s, the platform's velocity
+    platform.set_velocity(linear=v)
+    n, chunk = 40, 0.005
+    for k in range(n):
+        platform.set_pose(position=v * chunk * (k + 1))
+        world.run(chunk)
+    moved = rod.positions.mean(axis=0) - x0
+    np.testing.assert_allclose(moved[:2], v[:2] * chunk * n, atol=2e-3)
+    assert abs(moved[2]) < 1e-3
+    # The rope pulls back on the platform while it accelerates, not at constant velocity.
+    assert np.linalg.norm(platform.force[:2]) < 0.05 * rod.mass * G
+
+
+def test_penetrated_rope_is_pushed_out_of_a_closed_mesh_the_nearest_way():
+    """A rope placed 3 mm deep inside a closed 4 cm slab leaves through the nearest face
+    (the top), not onward through the slab."""
+    box = trimesh.creation.box(extents=(0.4, 0.4, 0.04))  # top face at z = 0.02
+    world = dx.World(dt=SETUPS["verlet"], gravity=(0, 0, 0))
+    rod = world.add_rod(rope(10, start=(-0.05, 0.0, 0.017)))  # axis 3 mm below the top
+    world.add_mesh(box, friction=0.0)
+    world.run(0.05)
+    assert np.all(rod.positions[:, 2] > 0.02 + 0.9 * 0.002), "not pushed out through the top"
+
+
+def test_open_mesh_pushes_a_rope_back_to_its_own_side():
+    """An open sheet is two-sided: a rope just under it is pushed down, one just over it up."""
+    V, F = grid_floor(0.4, 8)
+    world = dx.World(dt=SETUPS["verlet"], gravity=(0, 0, 0))
+    below = world.add_rod(rope(10, start=(-0.05, 0.0, -0.001)))
+    above = world.add_rod(rope(10, start=(-0.05, 0.1, 0.001)))
+    world.add_mesh((V, F), friction=0.0)
+    world.run(0.05)
+    assert np.all(below.positions[:, 2] < -0.9 * 0.002)
+    assert np.all(above.positions[:, 2] > 0.9 * 0.002)

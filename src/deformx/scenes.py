@@ -36,6 +36,7 @@ from pydantic import (
     ConfigDict,
     Discriminator,
     Field,
+    PrivateAttr,
     Tag,
     ValidationError,
     field_validator,
@@ -49,6 +50,7 @@ __all__ = [
     "StraightRod",
     "PointsRod",
     "Plane",
+    "Collider",
     "Output",
     "Scene",
     "SceneResult",
@@ -195,6 +197,36 @@ class Plane(_Model):
         return _nonzero(v, "normal")
 
 
+class Collider(_Model):
+    """A mesh or analytic primitive the rods touch (see ``World.add_mesh`` and friends).
+
+    ``kind``: mesh (``path`` to an OBJ/STL/PLY/GLB file, relative to the scene file), sphere
+    (``radius``), box (``half_extents``), capsule or cylinder (``radius``, ``length`` along the
+    local z axis). ``position`` (m) and ``rotation`` (3x3, world from local) place it.
+    """
+
+    kind: Literal["mesh", "sphere", "box", "capsule", "cylinder"]
+    path: str | None = Field(None, description="mesh file (kind: mesh)")
+    radius: PositiveFloat | None = Field(None, description="m (sphere, capsule, cylinder)")
+    length: NonNegativeFloat | None = Field(None, description="m (capsule, cylinder)")
+    half_extents: FiniteVec3 | None = Field(None, description="m (box)")
+    position: FiniteVec3 = (0.0, 0.0, 0.0)
+    rotation: list[FiniteVec3] | None = Field(None, description="3x3 rotation, rows")
+    stiffness: PositiveFloat | None = Field(None, description="N/m; default: engine's choice")
+    damping: NonNegativeFloat | None = Field(None, description="N s/m; default: critical")
+    static_friction: NonNegativeFloat = 0.5
+    kinetic_friction: NonNegativeFloat | None = Field(None, description="default: static_friction")
+
+    @model_validator(mode="after")
+    def _shape_fields(self):
+        need = {"mesh": ("path",), "sphere": ("radius",), "box": ("half_extents",),
+                "capsule": ("radius", "length"), "cylinder": ("radius", "length")}[self.kind]
+        for name in need:
+            if getattr(self, name) is None:
+                raise ValueError(f"a {self.kind} needs '{name}'")
+        return self
+
+
 class Output(_Model):
     directory: str = Field("deformx-output", description="where files are written")
     name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")] = Field(
@@ -217,7 +249,11 @@ class Scene(_Model):
     duration: Annotated[float, Field(gt=0.0, le=1.0e6, allow_inf_nan=False)] = 1.0
     rods: Annotated[list[RodSpec], Field(min_length=1)] = Field(default_factory=lambda: [StraightRod()])
     planes: list[Plane] = Field(default_factory=list)
+    colliders: list[Collider] = Field(default_factory=list)
+    rod_contact: bool = Field(True, description="contact between rods and of a rod with itself")
+    rod_friction: NonNegativeFloat = Field(0.2, description="Coulomb coefficient of rod contact")
     output: Output = Field(default_factory=Output)
+    _base_dir: Path | None = PrivateAttr(None)
 
     @field_validator("integrator")
     @classmethod
@@ -295,7 +331,9 @@ def load_scene(path: str | Path) -> Scene:
         data = yaml.safe_load(path.read_text())
     except yaml.YAMLError as err:
         raise ValueError(f"invalid scene {path}: not valid YAML: {err}") from None
-    return parse_scene(data, source=f"scene {path}")
+    scene = parse_scene(data, source=f"scene {path}")
+    scene._base_dir = path.resolve().parent  # relative mesh paths are relative to the file
+    return scene
 
 
 # --------------------------------------------------------------------------------------------
@@ -324,17 +362,20 @@ def _rewrap(field: str, err: Exception) -> ValueError:
     return ValueError(f"{field}: {err}")
 
 
-def build_world(scene: Scene):
+def build_world(scene: Scene, base_dir: str | Path | None = None):
     """Create the engine world for a validated scene. Returns ``(world, rods)``.
 
     Engine errors for invalid parameters are re-raised as ValueError prefixed with the scene
     field they came from (``rods[0]: ...``, ``planes[1]: ...``, ``integrator: ...``).
+    Relative mesh paths are taken from ``base_dir`` (the scene file's folder).
     """
+    base_dir = Path(base_dir) if base_dir is not None else scene._base_dir
     import deformx as dx
 
     try:
         world = dx.World(gravity=scene.gravity, dt=scene.dt, integrator=scene.integrator,
-                         iterations=scene.iterations, tolerance=scene.tolerance)
+                         iterations=scene.iterations, tolerance=scene.tolerance,
+                         rod_contact=scene.rod_contact, rod_friction=scene.rod_friction)
     except (ValueError, NotImplementedError) as err:
         field = "integrator" if "integrator" in str(err) or isinstance(err, NotImplementedError) else "dt"
         raise _rewrap(field, err) from err
@@ -371,7 +412,32 @@ def build_world(scene: Scene):
                             static_friction=p.static_friction, kinetic_friction=p.kinetic_friction)
         except ValueError as err:
             raise _rewrap(f"planes[{j}]", err) from err
+    for j, c in enumerate(scene.colliders):
+        try:
+            _add_collider(world, c, base_dir)
+        except ValueError as err:
+            raise _rewrap(f"colliders[{j}]", err) from err
     return world, rods
+
+
+def _add_collider(world, c: Collider, base_dir: Path | None) -> None:
+    rotation = np.eye(3) if c.rotation is None else np.asarray(c.rotation, dtype=float)
+    pose = (c.position, rotation)
+    contact = dict(stiffness=c.stiffness, damping=c.damping, static_friction=c.static_friction,
+                   kinetic_friction=c.kinetic_friction)
+    if c.kind == "mesh":
+        path = Path(c.path)
+        if not path.is_absolute() and base_dir is not None:
+            path = base_dir / path
+        world.add_mesh(str(path), pose=pose, **contact)
+    elif c.kind == "sphere":
+        world.add_sphere(c.radius, center=c.position, **contact)
+    elif c.kind == "box":
+        world.add_box(c.half_extents, pose=pose, **contact)
+    elif c.kind == "capsule":
+        world.add_capsule(c.radius, c.length, pose=pose, **contact)
+    else:
+        world.add_cylinder(c.radius, c.length, pose=pose, **contact)
 
 
 def warm_up_engine(scene: "Scene") -> None:

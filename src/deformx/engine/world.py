@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import SimulationDiverged
 from . import validation as check
 from .contact import colliders as col
-from .contact.segments import empty_colliders, query_cache
+from .contact.segments import query_cache
 from .kernels import coupled, implicit, verlet
 from .layout import Block
 from .rod import Rod
@@ -113,7 +113,7 @@ class World:
                 "rod_contact_damping", rod_contact_damping, "N s/m"),
             check.non_negative("rod_friction", rod_friction)])
         self._colliders: list[col.Collider] = []
-        self._cols = empty_colliders()
+        self._cols = None
         self._wrench = np.zeros((0, 0, 6))
         self._pairs = np.zeros((64, 2), dtype=np.int64)
         self._pair_state = np.zeros(4, dtype=np.int64)  # pairs, valid, builds, touching
@@ -255,8 +255,8 @@ class World:
         """Collider tables, per-element contact state and the rod-rod segment tables."""
         b = self._block
         E, N = b.Q.shape[0], b.pos.shape[0]
-        self._cols = (col.pack(self._colliders) + query_cache(N + E) if self._colliders
-                      else empty_colliders())
+        # None without colliders: the kernels then compile without any mesh code.
+        self._cols = col.pack(self._colliders) + query_cache(N + E) if self._colliders else None
         if getattr(self, "_col_anchor", None) is None or self._col_anchor.shape[0] != N + E:
             # Friction anchors of nodes, then elements (collider frame) and their colliders.
             self._col_anchor = np.zeros((N + E, 4))

@@ -17,7 +17,7 @@ _GOLDEN = 0.6180339887498949
 _SEARCH_STEPS = 48  # golden-section steps: the bracket shrinks to 1e-10 of the segment
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _box_sdf(x, y, z, hx, hy, hz):
     """Signed distance (m) and outward unit normal of a point to a box of half extents h."""
     qx = abs(x) - hx
@@ -36,7 +36,7 @@ def _box_sdf(x, y, z, hx, hy, hz):
     return d, math.copysign(ox / d, x), math.copysign(oy / d, y), math.copysign(oz / d, z)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _cylinder_sdf(x, y, z, radius, half):
     """Signed distance and outward normal to a capped cylinder along z."""
     rho = math.sqrt(x * x + y * y)
@@ -57,7 +57,7 @@ def _cylinder_sdf(x, y, z, radius, half):
     return d, ux * orr / d, uy * orr / d, sz * oz / d
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _capsule_sdf(x, y, z, radius, half):
     zc = min(max(z, -half), half)
     dz = z - zc

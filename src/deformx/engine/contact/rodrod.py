@@ -93,7 +93,7 @@ def max_displacement(pos, ref, nodes) -> float:
     return math.sqrt(worst)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def pair_penalty(m_i, m_j, k_floor, dt_ref, stiffness, damping):
     """Penalty stiffness (N/m) and damping (N s/m) of one rod-rod contact (automatic when
     ``stiffness`` < 0: contact frequency 0.2 / dt_ref for the lighter point, at least
@@ -178,7 +178,7 @@ def pair_forces(pairs, n_pairs, seg_a, seg_b, radius, pos, vel, mass, node_kmin,
     return touching
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _spread(force, contact_force, a, b, s, f, sign):
     for d in range(3):
         force[a, d] += sign * (1.0 - s) * f[d]
@@ -187,7 +187,7 @@ def _spread(force, contact_force, a, b, s, f, sign):
         contact_force[b, d] += sign * s * f[d]
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _add_stiffness(el_K, e, s, kn, n):
     for i in range(3):
         for j in range(3):

@@ -44,7 +44,7 @@ QUERY_CACHE = 48  # triangles kept per query; more nearby and the query walks th
 _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment crosses a face)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _to_local(pose, c, x0, x1, x2):
     y0 = x0 - pose[c, 0, 3]
     y1 = x1 - pose[c, 1, 3]
@@ -54,7 +54,7 @@ def _to_local(pose, c, x0, x1, x2):
             pose[c, 0, 2] * y0 + pose[c, 1, 2] * y1 + pose[c, 2, 2] * y2)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _rotate(pose, c, x0, x1, x2):
     return (pose[c, 0, 0] * x0 + pose[c, 0, 1] * x1 + pose[c, 0, 2] * x2,
             pose[c, 1, 0] * x0 + pose[c, 1, 1] * x1 + pose[c, 1, 2] * x2,
@@ -196,7 +196,7 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
     return True, s, sd, nw, (qw[0] + pose[c, 0, 3], qw[1] + pose[c, 1, 3], qw[2] + pose[c, 2, 3])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def collider_penalty(par, c, mass, k_floor, dt_ref):
     """Penalty stiffness (N/m) and damping (N s/m) of collider ``c`` for a contact of ``mass``:
     automatic (contact frequency 0.2 / dt_ref, at least ``k_floor``, critically damped) or the
@@ -296,7 +296,7 @@ def _one_contact(r, c, pose, twist, par, p, u, n, q, depth, m_c, k_floor, dt_ref
     return True, (f0, f1, f2), kc + cc / h, kt
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _add_K(el_K, e, q, w, kn, kt, n):
     for i in range(3):
         for j in range(3):

@@ -244,14 +244,14 @@ def _normalized(x: np.ndarray) -> np.ndarray:
     return np.divide(x, norm, out=np.zeros_like(x), where=norm > 0.0)
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _gap2(lo0: float, hi0: float, lo1: float, hi1: float) -> float:
     """Squared gap (m^2) between intervals [lo0, hi0] and [lo1, hi1] (0 if they overlap)."""
     d = max(lo0 - hi1, lo1 - hi0, 0.0)
     return d * d
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _box_gap2(lo, hi, node, slo, shi) -> float:
     """Squared distance (m^2) between node's box and the box slo-shi; a lower bound."""
     return (_gap2(lo[node, 0], hi[node, 0], slo[0], shi[0])
@@ -259,7 +259,7 @@ def _box_gap2(lo, hi, node, slo, shi) -> float:
             + _gap2(lo[node, 2], hi[node, 2], slo[2], shi[2]))
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _centre_dist2(lo, hi, node, x) -> float:
     """Squared distance (m^2) from node's box centre to point x."""
     d0 = 0.5 * (lo[node, 0] + hi[node, 0]) - x[0]

@@ -21,7 +21,7 @@ _PARALLEL = 1e-24
 _FLAT = 1e-14
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _clamp01(x: float) -> float:
     if x < 0.0:
         return 0.0
@@ -30,28 +30,28 @@ def _clamp01(x: float) -> float:
     return x
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _sub(a, b):
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _dot(a, b) -> float:
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def lerp(a, b, t: float):
     """Point ``a + t (b - a)`` (m) of segment ab."""
     return (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]))
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def bary_point(a, b, c, u: float, v: float, w: float):
     """Point ``u a + v b + w c`` (m) of triangle abc."""
     return (u * a[0] + v * b[0] + w * c[0],
@@ -59,7 +59,7 @@ def bary_point(a, b, c, u: float, v: float, w: float):
             u * a[2] + v * b[2] + w * c[2])
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def dist2(a, b) -> float:
     """Squared distance (m^2) between points a and b."""
     d0 = a[0] - b[0]
@@ -68,7 +68,7 @@ def dist2(a, b) -> float:
     return d0 * d0 + d1 * d1 + d2 * d2
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def closest_point_segment(p, a, b) -> float:
     """Parameter t in [0, 1] of the point of segment ab closest to p (0 when a == b)."""
     ab = _sub(b, a)

@@ -367,7 +367,7 @@ def _more_contacts(r, n0, nn, e0, ne, h, pos, vel, xn, mass, node_radius, node_k
                     el_K[e, q, i, j] = 0.0
     # As stiff as the explicit integrator's contact at dt <= 1e-4 s (as for planes).
     dt_ref = min(h, 1e-4)
-    if cols[0].shape[0] > 0:
+    if cols is not None:
         rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, xn, mass, node_radius,
                               node_kmin, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, force,
                               contact_force, commit, True)
@@ -444,7 +444,9 @@ def advance_rod_implicit(
     fixed = np.zeros(nb, dtype=np.bool_)
     no_band = np.zeros((0, BLOCK_BAND + 1, 3, 3))
     has_planes = planes.shape[0] > 0
-    n_cols = cols[0].shape[0]
+    n_cols = 0
+    if cols is not None:  # None without colliders (the branch is pruned at compile time)
+        n_cols = cols[0].shape[0]
     own_pairs = 0
     for p in range(n_pairs):
         if seg_rod[pairs[p, 0]] == r or seg_rod[pairs[p, 1]] == r:

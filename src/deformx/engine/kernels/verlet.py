@@ -112,7 +112,11 @@ def advance_rod(
     decay = rod_decay[r]
     g0, g1, g2 = gravity[0], gravity[1], gravity[2]
     n_planes = planes.shape[0]
-    n_cols = cols[0].shape[0]
+    # ``cols`` is None without colliders: numba then prunes the collider branch at compile
+    # time, which keeps the mesh code (and its compile time) out of plain worlds.
+    n_cols = 0
+    if cols is not None:
+        n_cols = cols[0].shape[0]
     touching = n_planes > 0 or n_cols > 0 or use_extra
 
     _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h)
@@ -138,7 +142,7 @@ def advance_rod(
             if n_planes > 0:
                 _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt,
                                 contact_force)
-            if n_cols > 0:
+            if cols is not None:
                 rod_collider_contacts(r, n0, nn, e0, ne, dt, dt, pos, vel, pos, mass, node_radius,
                                       node_kmin, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
                                       force, contact_force, True, False)
