@@ -32,9 +32,11 @@ parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--wrap", default="drape", choices=("drape", "loop"),
                     help="an open rope draped over the head, or a closed ring around the neck")
 parser.add_argument("--out", default="out/scarf_on_blob", help="output directory")
-parser.add_argument("--duration", type=float, default=3.0, help="simulated time (s)")
+parser.add_argument("--duration", type=float,
+                    help="simulated time (s); default 3 (drape), 1 (loop)")
 parser.add_argument("--integrator", default="stable", choices=("stable", "verlet"))
 args = parser.parse_args()
+duration = args.duration or (3.0 if args.wrap == "drape" else 1.0)
 out = Path(args.out)
 out.mkdir(parents=True, exist_ok=True)
 name = "scarf_on_blob" if args.wrap == "drape" else "scarf_on_blob_loop"
@@ -101,7 +103,7 @@ weight = scarf.mass * 9.81
 recorder = dx.Recorder(world, every=0.02)
 t_f, on_blob, on_ground = [0.0], [0.0], [0.0]
 wall = time.perf_counter()
-while world.time < args.duration - 1e-9:
+while world.time < duration - 1e-9:
     world.run(0.02, recorder=recorder)
     # blob.force: what the rope pushes on the blob. The rope's total contact force minus the
     # blob's share is the ground's (rope-on-rope contact cancels out in the sum).
@@ -119,11 +121,12 @@ if scarf.closed:  # repeat the first node: polylines that close the ring
 gaps = [surface_gap(blob_tm, x, scarf.radius) for x in positions]
 k_back = max(0, len(positions) - 1 - int(round(0.1 / recorder.every)))
 settled = np.linalg.norm(positions[-1] - positions[k_back], axis=1).max()  # at rest?
-print(f"{world}: {args.duration:g} s simulated in {wall:.1f} s wall")
+print(f"{world}: {duration:g} s simulated in {wall:.1f} s wall")
 print(f"scarf weight {weight:.4f} N; at the end the blob carries {on_blob[-1]:.4f} N and the "
       f"ground {on_ground[-1]:.4f} N (sum {(on_blob[-1] + on_ground[-1]) / weight:.3f} W)")
 print(f"closest approach of the rope surface to the blob: {min(gaps) * 1e3:+.2f} mm "
-      f"(final {gaps[-1] * 1e3:+.2f} mm); largest move in the last 0.1 s {settled * 1e3:.3f} mm")
+      f"(start {gaps[0] * 1e3:+.2f}, final {gaps[-1] * 1e3:+.2f} mm); largest move in the last "
+      f"0.1 s {settled * 1e3:.3f} mm")
 print("solver:", world.solver_stats())
 
 
@@ -151,8 +154,8 @@ def tube(x, r, sides=8):
 
 # Figure: the blob and the scarf (one polygon set, so the painter's sort hides what is behind)
 # at four times, and the vertical contact forces against the rope's weight.
-frames = [0, *np.searchsorted(data["time"], [0.25, 0.6] if args.wrap == "drape" else [0.1, 0.3]),
-          len(data["time"]) - 1]
+picks = [0.25, 0.6] if args.wrap == "drape" else [0.04, 0.08]
+frames = [0, *np.searchsorted(data["time"], picks), len(data["time"]) - 1]
 fig = plt.figure(figsize=(13, 7.2))
 blob_faces = blob_tm.triangles
 blob_colors = shaded_faces(blob_faces, (0.85, 0.82, 0.78))
@@ -163,8 +166,11 @@ for k, f in enumerate(frames):
     polys = list(blob_faces) + list(quads)
     colors = np.vstack([blob_colors, shaded_faces(quads[:, :3], (0.75, 0.1, 0.1))])
     ax.add_collection3d(Poly3DCollection(polys, facecolors=colors, edgecolors="none"))
-    ax.set(xlim=(-0.13, 0.13), ylim=(-0.13, 0.13), zlim=(0.0, 0.21), box_aspect=(1, 1, 0.8))
-    ax.view_init(elev=20, azim=-35)
+    if args.wrap == "drape":
+        ax.set(xlim=(-0.13, 0.13), ylim=(-0.13, 0.13), zlim=(0.0, 0.21), box_aspect=(1, 1, 0.8))
+    else:  # closer
+        ax.set(xlim=(-0.1, 0.1), ylim=(-0.1, 0.1), zlim=(0.0, 0.2), box_aspect=(1, 1, 1))
+    ax.view_init(elev=20 if args.wrap == "drape" else 30, azim=-35)
     ax.set_axis_off()
     ax.set_title(f"t = {data['time'][f]:.2f} s")
 ax = fig.add_subplot(2, 1, 2)
@@ -175,7 +181,8 @@ ax.axhline(weight, color="0.4", ls="--", label=f"scarf weight {weight:.3f} N")
 ax.set(xlabel="time (s)", ylabel="vertical contact force (N)", ylim=(0, 2.5 * weight))
 ax.legend(loc="upper right", fontsize=9)
 ax.grid(alpha=0.3)
-fig.suptitle(f"Scarf {'dropped on' if args.wrap == 'drape' else 'looped around'} a blob mesh ({len(blob_faces)} triangles), {args.integrator} "
+how = "dropped on" if args.wrap == "drape" else "looped around"
+fig.suptitle(f"Scarf {how} a blob mesh ({len(blob_faces)} triangles), {args.integrator} "
              f"integrator, dt = {dt:g} s")
 fig.tight_layout()
 fig.savefig(out / f"{name}.png", dpi=90)
