@@ -24,6 +24,34 @@ from ..geometry.closest import closest_segment_segment
 
 
 @njit(cache=True, error_model="numpy")
+def _sift_down(key, order, root, end):
+    while True:
+        child = 2 * root + 1
+        if child >= end:
+            return
+        if child + 1 < end and key[order[child + 1]] > key[order[child]]:
+            child += 1
+        if key[order[root]] >= key[order[child]]:
+            return
+        order[root], order[child] = order[child], order[root]
+        root = child
+
+
+@njit(cache=True, error_model="numpy")
+def argsort_heap(key):
+    """Indices that sort ``key`` ascending (heapsort: O(n log n), and unlike ``np.argsort`` it
+    adds well under a second to numba's first compile instead of ~10 s)."""
+    n = key.shape[0]
+    order = np.arange(n)
+    for root in range(n // 2 - 1, -1, -1):
+        _sift_down(key, order, root, n)
+    for end in range(n - 1, 0, -1):
+        order[0], order[end] = order[end], order[0]
+        _sift_down(key, order, 0, end)
+    return order
+
+
+@njit(cache=True, error_model="numpy")
 def build_pairs(segs, seg_a, seg_b, seg_rod, seg_k, seg_ne, seg_closed, excluded, radius, pos,
                 pos2, skin, pairs):
     """Candidate pairs among the segments ``segs`` whose padded boxes overlap at ``pos`` or
@@ -45,15 +73,23 @@ def build_pairs(segs, seg_a, seg_b, seg_rod, seg_k, seg_ne, seg_closed, excluded
             M = max(pos[a, d], pos[b, d], pos2[a, d], pos2[b, d])
             lo[q, d] = m - pad
             hi[q, d] = M + pad
-    # Sweep along the axis where the boxes spread most.
+    # Sweep along the axis where the boxes spread most (plain loops: numba compiles slicing
+    # reductions and slice copies slowly, and this is on every first run's path).
     axis = 0
     best = -1.0
     for d in range(3):
-        spread = lo[:, d].max() - lo[:, d].min()
-        if spread > best:
-            best = spread
+        low = np.inf
+        high = -np.inf
+        for q in range(S):
+            low = min(low, lo[q, d])
+            high = max(high, lo[q, d])
+        if high - low > best:
+            best = high - low
             axis = d
-    order = np.argsort(lo[:, axis])
+    key = np.empty(S)
+    for q in range(S):
+        key[q] = lo[q, axis]
+    order = argsort_heap(key)
     count = 0
     for oi in range(S):
         qi = order[oi]
@@ -74,7 +110,9 @@ def build_pairs(segs, seg_a, seg_b, seg_rod, seg_k, seg_ne, seg_closed, excluded
                     continue
             if count == pairs.shape[0]:
                 grown = np.empty((2 * pairs.shape[0] + 16, 2), dtype=np.int64)
-                grown[:count] = pairs[:count]
+                for c in range(count):
+                    grown[c, 0] = pairs[c, 0]
+                    grown[c, 1] = pairs[c, 1]
                 pairs = grown
             pairs[count, 0] = min(i, j)
             pairs[count, 1] = max(i, j)
