@@ -61,7 +61,7 @@ def _rotate(pose, c, x0, x1, x2):
             pose[c, 2, 0] * x0 + pose[c, 2, 1] * x1 + pose[c, 2, 2] * x2)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, la, lb,
                   reach, skin, qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n):
     """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache.
@@ -128,7 +128,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     return tri, rs, ru, rv, rw, best, fresh
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
              Border, Fn, En, Vn, qcache, slot, pa, pb, reach):
     """Deepest point of world segment pa-pb against collider ``c`` within ``reach`` (m).
@@ -141,7 +141,8 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
     if kind == MESH:
         # The packed tables use global indices (see ``pack``): no per-query views, whose
-        # reference counting would cost more than the cached query itself.
+        # reference counting would cost more than the cached query itself (for the same reason
+        # this function and _mesh_nearest are inlined: a call passing ~20 arrays costs more).
         root = mesh_rng[c, 4]
         verts = MV
         faces = MF
