@@ -200,7 +200,12 @@ def shape_params(par: np.ndarray, values: Sequence[float]) -> np.ndarray:
 
 
 def pack(colliders: Sequence[Collider]) -> tuple:
-    """The kernels' collider tables (see :mod:`deformx.engine.contact.segments`)."""
+    """The kernels' collider tables (see :mod:`deformx.engine.contact.segments`).
+
+    Meshes are concatenated with global indices: collider c owns vertices, faces and BVH nodes
+    ``rng[c, 0]:rng[c, 1]``, ``rng[c, 2]:rng[c, 3]`` and ``rng[c, 4]:rng[c, 5]`` (its root is
+    node ``rng[c, 4]``), and its faces, child links, leaf slots and triangle ids point into
+    the packed arrays."""
     C = len(colliders)
     kind = np.array([KINDS[c.kind] for c in colliders], dtype=np.int64)
     pose = np.array([c._pose for c in colliders]).reshape(C, 4, 4)
@@ -217,10 +222,14 @@ def pack(colliders: Sequence[Collider]) -> tuple:
         bvh = c._bvh
         fn, en, vn = c._normals
         rng[i] = (nv, nv + V.shape[0], nf, nf + F.shape[0], nb, nb + bvh.lo.shape[0])
+        # Indices become global (vertex, face and BVH node ids of the packed tables), so the
+        # kernels index them without per-query views; the mesh's root is node nb.
         MV.append(V)
-        MF.append(F)
-        for lst, arr in ((lo, bvh.lo), (hi, bvh.hi), (left, bvh.left), (right, bvh.right),
-                         (start, bvh.start), (count, bvh.count), (order, bvh.order),
+        MF.append(F + nv)
+        for lst, arr in ((lo, bvh.lo), (hi, bvh.hi),
+                         (left, np.where(bvh.left >= 0, bvh.left + nb, -1)),
+                         (right, np.where(bvh.right >= 0, bvh.right + nb, -1)),
+                         (start, bvh.start + nf), (count, bvh.count), (order, bvh.order + nf),
                          (Fn, fn), (En, en), (Vn, vn)):
             lst.append(arr)
         nv += V.shape[0]

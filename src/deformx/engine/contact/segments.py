@@ -32,15 +32,15 @@ import math
 import numpy as np
 from numba import njit
 
-from ..geometry.bvh import bvh_closest_segment, bvh_collect_segment, signed_side
-from ..geometry.closest import bary_point, closest_segment_triangle, dist2, lerp
+from ..geometry.bvh import bvh_closest_segment, bvh_nearest_k, signed_side
+from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from .primitives import segment_deepest, shape_sdf
 
 MESH = 0
 # par columns
 P_K, P_C, P_MUS, P_MUK, P_AUTO, P_TWO_SIDED, P_REPULSION, P_SHAPE = 0, 1, 2, 3, 4, 5, 6, 7
 N_PAR = 12
-QUERY_CACHE = 48  # triangles kept per query; more nearby and the query walks the BVH each time
+QUERY_CACHE = 32  # nearest triangles kept per query
 _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment crosses a face)
 
 
@@ -61,55 +61,74 @@ def _rotate(pose, c, x0, x1, x2):
             pose[c, 2, 0] * x0 + pose[c, 2, 1] * x1 + pose[c, 2, 2] * x2)
 
 
-@njit(cache=True, error_model="numpy")
-def _mesh_nearest(c, slot, lo, hi, left, right, start, count, order, verts, faces, la, lb, reach,
-                  skin, qc_col, qc_pos, qc_tris, qc_n):
+@njit(cache=True, inline="always", error_model="numpy")
+def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, la, lb,
+                  reach, skin, qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n):
     """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache.
 
-    The cache holds the triangles that may lie within ``reach + skin`` of where the slot's
-    segment was when it was filled; it stays exact while both ends move less than ``skin``, so
-    most steps test a handful of triangles instead of walking the BVH. Also returns whether
-    the cache was (re)filled or bypassed on this call.
+    The cache holds the triangles nearest to where the slot's segment was when it was filled,
+    sorted by their exact distance then, and a horizon that no other triangle comes closer
+    than (``bvh_nearest_k``). After the ends moved by at most ``delta`` every triangle is at
+    least its cached distance minus ``delta`` away, so the sorted scan stops at the first
+    triangle that cannot beat the best so far (most steps test one or two), and the answer is
+    exact while the best found lies within the horizon minus ``delta``; otherwise, or after
+    moving more than ``skin``, the cache is refilled. Also returns whether the cache was
+    (re)filled or bypassed on this call. ``root``: the mesh's BVH root in the packed tables.
     """
+    point = la[0] == lb[0] and la[1] == lb[1] and la[2] == lb[2]
     moved = 0.0
+    delta2 = 0.0
     fresh = False
     if qc_col[slot] == c:
         for d in range(3):
             moved = max(moved, abs(la[d] - qc_pos[slot, d]), abs(lb[d] - qc_pos[slot, 3 + d]))
-    if qc_col[slot] != c or moved * math.sqrt(3.0) > skin:
-        n = bvh_collect_segment(lo, hi, left, right, start, count, order, verts, faces, la, lb,
-                                reach + skin, qc_tris[slot])
-        if n < 0:  # too many triangles nearby to cache: search the tree every time
+        delta2 = max(dist2(la, (qc_pos[slot, 0], qc_pos[slot, 1], qc_pos[slot, 2])),
+                     dist2(lb, (qc_pos[slot, 3], qc_pos[slot, 4], qc_pos[slot, 5])))
+    refill = qc_col[slot] != c or moved * math.sqrt(3.0) > skin
+    while True:
+        if refill:
+            n, far = bvh_nearest_k(lo, hi, left, right, start, count, order, verts, faces, la,
+                                   lb, reach + skin, qc_tris[slot], qc_dist[slot], root)
+            fresh = True
+            delta2 = 0.0
+            qc_col[slot] = c
+            qc_n[slot] = n
+            qc_far[slot] = far
+            for d in range(3):
+                qc_pos[slot, d] = la[d]
+                qc_pos[slot, 3 + d] = lb[d]
+        delta = math.sqrt(delta2)
+        best = reach * reach
+        tri = -1
+        rs = ru = rv = rw = 0.0
+        for k in range(qc_n[slot]):
+            low = qc_dist[slot, k] - delta
+            if low > 0.0 and low * low > best:
+                break  # sorted: no later triangle can be nearer either
+            f = qc_tris[slot, k]
+            va = (verts[faces[f, 0], 0], verts[faces[f, 0], 1], verts[faces[f, 0], 2])
+            vb = (verts[faces[f, 1], 0], verts[faces[f, 1], 1], verts[faces[f, 1], 2])
+            vc = (verts[faces[f, 2], 0], verts[faces[f, 2], 1], verts[faces[f, 2], 2])
+            s, u, v, w, d2 = segment_triangle_dist2(la, lb, point, va, vb, vc)
+            if d2 < best or (tri < 0 and d2 <= best):
+                best = d2
+                tri = f
+                rs, ru, rv, rw = s, u, v, w
+        low = qc_far[slot] - delta
+        if low > 0.0 and low * low > best:
+            break  # no triangle left out of the cache can be as near
+        if fresh:  # more than the cache's size tie at the nearest distance: search the tree
             qc_col[slot] = -1
             tri, s, u, v, w, d2 = bvh_closest_segment(lo, hi, left, right, start, count, order,
-                                                      verts, faces, la, lb, reach)
+                                                      verts, faces, la, lb, reach, root)
             return tri, s, u, v, w, d2, True
-        fresh = True
-        qc_col[slot] = c
-        qc_n[slot] = n
-        for d in range(3):
-            qc_pos[slot, d] = la[d]
-            qc_pos[slot, 3 + d] = lb[d]
-    best = reach * reach
-    tri = -1
-    rs = ru = rv = rw = 0.0
-    for k in range(qc_n[slot]):
-        f = qc_tris[slot, k]
-        va = (verts[faces[f, 0], 0], verts[faces[f, 0], 1], verts[faces[f, 0], 2])
-        vb = (verts[faces[f, 1], 0], verts[faces[f, 1], 1], verts[faces[f, 1], 2])
-        vc = (verts[faces[f, 2], 0], verts[faces[f, 2], 1], verts[faces[f, 2], 2])
-        s, u, v, w = closest_segment_triangle(la, lb, va, vb, vc)
-        d2 = dist2(lerp(la, lb, s), bary_point(va, vb, vc, u, v, w))
-        if d2 < best or (tri < 0 and d2 <= best):
-            best = d2
-            tri = f
-            rs, ru, rv, rw = s, u, v, w
+        refill = True
     if tri < 0:
         return -1, 0.0, 0.0, 0.0, 0.0, np.inf, fresh
     return tri, rs, ru, rv, rw, best, fresh
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
              Border, Fn, En, Vn, qcache, slot, pa, pb, reach):
     """Deepest point of world segment pa-pb against collider ``c`` within ``reach`` (m).
@@ -121,23 +140,24 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
     if kind == MESH:
-        v0, v1, f0, f1, b0, b1 = (mesh_rng[c, 0], mesh_rng[c, 1], mesh_rng[c, 2], mesh_rng[c, 3],
-                                  mesh_rng[c, 4], mesh_rng[c, 5])
-        faces = MF[f0:f1]
-        verts = MV[v0:v1]
-        qc_col, qc_pos, qc_tris, qc_n = qcache
-        lo, hi, left, right = Blo[b0:b1], Bhi[b0:b1], Bleft[b0:b1], Bright[b0:b1]
-        start, count, order = Bstart[b0:b1], Bcount[b0:b1], Border[f0:f1]
-        tri, s, u, v, w, d2, fresh = _mesh_nearest(c, slot, lo, hi, left, right, start, count,
-                                                   order, verts, faces, la, lb, reach,
-                                                   0.5 * reach, qc_col, qc_pos, qc_tris, qc_n)
+        # The packed tables use global indices (see ``pack``): no per-query views, whose
+        # reference counting would cost more than the cached query itself (for the same reason
+        # this function and _mesh_nearest are inlined: a call passing ~20 arrays costs more).
+        root = mesh_rng[c, 4]
+        verts = MV
+        faces = MF
+        qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n = qcache
+        tri, s, u, v, w, d2, fresh = _mesh_nearest(c, slot, root, Blo, Bhi, Bleft, Bright,
+                                                   Bstart, Bcount, Border, verts, faces, la, lb,
+                                                   reach, 0.5 * reach, qc_col, qc_pos, qc_tris,
+                                                   qc_dist, qc_far, qc_n)
         if tri < 0 and fresh and par[c, P_TWO_SIDED] == 0.0 and par[c, P_REPULSION] > 0.0:
             # Nothing near the surface: the segment may still be inside a closed mesh, less
             # than the repulsion distance deep (checked when the cache is refilled, or on
             # every call while it is inside).
-            tri, s, u, v, w, d2 = bvh_closest_segment(lo, hi, left, right, start, count, order,
-                                                      verts, faces, la, lb,
-                                                      reach + par[c, P_REPULSION])
+            tri, s, u, v, w, d2 = bvh_closest_segment(Blo, Bhi, Bleft, Bright, Bstart, Bcount,
+                                                      Border, verts, faces, la, lb,
+                                                      reach + par[c, P_REPULSION], root)
             if tri >= 0:
                 p = lerp(la, lb, s)
                 q = bary_point((verts[faces[tri, 0], 0], verts[faces[tri, 0], 1],
@@ -146,7 +166,7 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
                                 verts[faces[tri, 1], 2]),
                                (verts[faces[tri, 2], 0], verts[faces[tri, 2], 1],
                                 verts[faces[tri, 2], 2]), u, v, w)
-                if signed_side(Fn[f0:f1], En[f0:f1], Vn[v0:v1], faces, tri, u, v, w, p, q) > 0.0:
+                if signed_side(Fn, En, Vn, faces, tri, u, v, w, p, q) > 0.0:
                     tri = -1  # outside and clear of the surface
                 else:
                     qc_col[slot] = -1  # deep inside: search afresh until it is out
@@ -158,12 +178,12 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
              u * verts[ia, 2] + v * verts[ib, 2] + w * verts[ic, 2])
         p = (la[0] + s * (lb[0] - la[0]), la[1] + s * (lb[1] - la[1]), la[2] + s * (lb[2] - la[2]))
         dist = math.sqrt(d2)
-        fn = Fn[f0 + tri]
+        fn = Fn[tri]
         if dist > _TINY:
             n = ((p[0] - q[0]) / dist, (p[1] - q[1]) / dist, (p[2] - q[2]) / dist)
             sd = dist
             if par[c, P_TWO_SIDED] == 0.0:
-                if signed_side(Fn[f0:f1], En[f0:f1], Vn[v0:v1], faces, tri, u, v, w, p, q) < 0.0:
+                if signed_side(Fn, En, Vn, faces, tri, u, v, w, p, q) < 0.0:
                     # Inside a closed mesh: push out the nearest way.
                     n = (-n[0], -n[1], -n[2])
                     sd = -dist
@@ -324,8 +344,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
     (kind, pose, twist, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-     Border, Fn, En, Vn, qc_col, qc_pos, qc_tris, qc_n) = cols
-    qcache = (qc_col, qc_pos, qc_tris, qc_n)
+     Border, Fn, En, Vn, qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n) = cols
+    qcache = (qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n)
     n_col = kind.shape[0]
     n_nodes = pos.shape[0]
     for c in range(n_col):
@@ -443,6 +463,9 @@ def empty_colliders() -> tuple:
 
 
 def query_cache(n_slots: int) -> tuple:
-    """Empty mesh query caches for ``n_slots`` queries (nodes, then elements)."""
+    """Empty mesh query caches for ``n_slots`` queries (nodes, then elements): the collider
+    (-1: none), the segment's ends when filled (m), the nearest triangles, their distances then
+    (m), the horizon (m) and the count (see ``_mesh_nearest``)."""
     return (np.full(n_slots, -1, dtype=np.int64), np.zeros((n_slots, 6)),
-            np.zeros((n_slots, QUERY_CACHE), dtype=np.int64), np.zeros(n_slots, dtype=np.int64))
+            np.zeros((n_slots, QUERY_CACHE), dtype=np.int64), np.zeros((n_slots, QUERY_CACHE)),
+            np.zeros(n_slots), np.zeros(n_slots, dtype=np.int64))

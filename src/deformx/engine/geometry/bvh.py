@@ -26,6 +26,7 @@ from deformx.engine.geometry.closest import (
     closest_segment_triangle,
     dist2,
     lerp,
+    segment_triangle_dist2,
 )
 
 LEAF_SIZE = 4  # triangles per leaf at most
@@ -270,13 +271,14 @@ def _centre_dist2(lo, hi, node, x) -> float:
 
 @njit(cache=True, error_model="numpy")
 def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
-                        max_dist):
+                        max_dist, root=0):
     """Triangle nearest to segment p0p1 (tuples, m) among those within ``max_dist`` (m).
 
     Returns ``(tri, s, u, v, w, d2)``: the triangle (-1 if none is within ``max_dist``), the
     segment parameter and barycentrics of a closest pair, and its squared distance (m^2; inf
     when tri is -1). ``max_dist = np.inf`` searches the whole mesh. Depth-first, nearer child
     first, pruning boxes farther than the best so far from the segment's bounding box.
+    ``root`` is the tree's root node (several trees may share the arrays, see ``pack``).
     """
     slo = (min(p0[0], p1[0]), min(p0[1], p1[1]), min(p0[2], p1[2]))
     shi = (max(p0[0], p1[0]), max(p0[1], p1[1]), max(p0[2], p1[2]))
@@ -286,10 +288,10 @@ def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, face
     rs = ru = rv = rw = 0.0
     stack = np.empty(_STACK, dtype=np.int64)
     bound = np.empty(_STACK)
-    g = _box_gap2(lo, hi, 0, slo, shi)
+    g = _box_gap2(lo, hi, root, slo, shi)
     sp = 0
     if g <= best:
-        stack[0] = 0
+        stack[0] = root
         bound[0] = g
         sp = 1
     while sp > 0:
@@ -386,26 +388,37 @@ def signed_side(face_n, edge_n, vertex_n, faces, tri, u, v, w, p, c) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def bvh_collect_segment(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
-                        max_dist, out) -> int:
-    """Triangles that may lie within ``max_dist`` (m) of segment p0p1, written to ``out``.
+def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0, p1, max_dist,
+                  out_tri, out_dist, root=0):
+    """The ``k = len(out_tri)`` triangles nearest to segment p0p1 (m) within ``max_dist`` (m).
 
-    A superset by cheap bounds (node and triangle boxes, the triangle's bounding sphere), so a
-    caller can keep the list while the segment moves less than the slack it asked for and test
-    only these triangles exactly. Returns the count, or -1 if ``out`` is too small.
+    Writes their ids and exact distances (m, ascending) to ``out_tri`` and ``out_dist`` and
+    returns ``(n, horizon)``: n triangles listed, and every triangle not listed is at least
+    ``horizon`` (m) from the segment (``max_dist`` when fewer than k lie within it). A caller
+    can keep the list while the segment moves by at most ``delta``: a listed triangle is then
+    at least ``out_dist - delta`` away and any other at least ``horizon - delta``. ``root`` as
+    in ``bvh_closest_segment``.
     """
+    point = p0[0] == p1[0] and p0[1] == p1[1] and p0[2] == p1[2]
+    k = out_tri.shape[0]
     slo = (min(p0[0], p1[0]), min(p0[1], p1[1]), min(p0[2], p1[2]))
     shi = (max(p0[0], p1[0]), max(p0[1], p1[1]), max(p0[2], p1[2]))
-    reach = max_dist * max_dist
-    stack = np.empty(_STACK, dtype=np.int64)
+    mid = lerp(p0, p1, 0.5)
+    horizon = max_dist
     n = 0
+    stack = np.empty(_STACK, dtype=np.int64)
+    bound = np.empty(_STACK)
+    g = _box_gap2(lo, hi, root, slo, shi)
     sp = 0
-    if _box_gap2(lo, hi, 0, slo, shi) <= reach:
-        stack[0] = 0
+    if g <= horizon * horizon:
+        stack[0] = root
+        bound[0] = g
         sp = 1
     while sp > 0:
         sp -= 1
         node = stack[sp]
+        if bound[sp] > horizon * horizon:
+            continue  # the horizon shrank since this node was pushed
         a = left[node]
         if a < 0:
             for i in range(start[node], start[node] + count[node]):
@@ -413,23 +426,53 @@ def bvh_collect_segment(lo, hi, left, right, start, count, order, vertices, face
                 va = (vertices[faces[f, 0], 0], vertices[faces[f, 0], 1], vertices[faces[f, 0], 2])
                 vb = (vertices[faces[f, 1], 0], vertices[faces[f, 1], 1], vertices[faces[f, 1], 2])
                 vc = (vertices[faces[f, 2], 0], vertices[faces[f, 2], 1], vertices[faces[f, 2], 2])
+                # Cheap cuts (as in bvh_closest_segment): beyond the horizon a triangle can
+                # neither enter the list nor lower the horizon.
+                h2 = horizon * horizon
                 g = _gap2(min(va[0], vb[0], vc[0]), max(va[0], vb[0], vc[0]), slo[0], shi[0])
                 g += _gap2(min(va[1], vb[1], vc[1]), max(va[1], vb[1], vc[1]), slo[1], shi[1])
                 g += _gap2(min(va[2], vb[2], vc[2]), max(va[2], vb[2], vc[2]), slo[2], shi[2])
-                if g > reach:
+                if g > h2:
                     continue
                 cen = bary_point(va, vb, vc, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)
                 rad = math.sqrt(max(dist2(cen, va), dist2(cen, vb), dist2(cen, vc)))
                 gap = math.sqrt(dist2(lerp(p0, p1, closest_point_segment(cen, p0, p1)), cen)) - rad
-                if gap > 0.0 and gap * gap > reach:
+                if gap > 0.0 and gap * gap > h2:
                     continue
-                if n == out.shape[0]:
-                    return -1
-                out[n] = f
+                d = math.sqrt(segment_triangle_dist2(p0, p1, point, va, vb, vc)[4])
+                if d > horizon:
+                    continue
+                if n == k:
+                    if d >= out_dist[k - 1]:
+                        horizon = d  # not listed, and nearer than the horizon so far
+                        continue
+                    horizon = out_dist[k - 1]  # the farthest listed one drops out
+                    n -= 1
+                j = n  # insertion into the sorted list
+                while j > 0 and out_dist[j - 1] > d:
+                    out_tri[j] = out_tri[j - 1]
+                    out_dist[j] = out_dist[j - 1]
+                    j -= 1
+                out_tri[j] = f
+                out_dist[j] = d
                 n += 1
             continue
-        for child in (a, right[node]):
-            if _box_gap2(lo, hi, child, slo, shi) <= reach:
-                stack[sp] = child
-                sp += 1
-    return n
+        b = right[node]
+        ga = _box_gap2(lo, hi, a, slo, shi)
+        gb = _box_gap2(lo, hi, b, slo, shi)
+        swap = ga > gb
+        if ga == gb:
+            swap = _centre_dist2(lo, hi, a, mid) > _centre_dist2(lo, hi, b, mid)
+        if swap:  # nearer child on top: the list fills with near triangles first
+            a, b = b, a
+            ga, gb = gb, ga
+        h2 = horizon * horizon
+        if gb <= h2:
+            stack[sp] = b
+            bound[sp] = gb
+            sp += 1
+        if ga <= h2:
+            stack[sp] = a
+            bound[sp] = ga
+            sp += 1
+    return n, horizon

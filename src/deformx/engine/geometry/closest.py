@@ -242,3 +242,15 @@ def closest_segment_triangle(p0, p1, a, b, c) -> tuple[float, float, float, floa
     if d < best:
         rs, ru, rv, rw = s, t, 0.0, 1.0 - t
     return rs, ru, rv, rw
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def segment_triangle_dist2(p0, p1, point: bool, a, b, c) -> tuple[float, float, float, float,
+                                                                     float]:
+    """A closest pair (s, u, v, w) of segment p0p1 and triangle abc and its squared distance
+    (m^2). ``point`` says that p0 == p1, which takes the much cheaper point-triangle test."""
+    if point:
+        u, v, w = closest_point_triangle(p0, a, b, c)
+        return 0.0, u, v, w, dist2(p0, bary_point(a, b, c, u, v, w))
+    s, u, v, w = closest_segment_triangle(p0, p1, a, b, c)
+    return s, u, v, w, dist2(lerp(p0, p1, s), bary_point(a, b, c, u, v, w))
