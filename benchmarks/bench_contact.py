@@ -7,7 +7,10 @@ carries over between machines):
    explicit steps at the same dt: seconds per step of PyElastica 1.0 with ``RodRodContact`` and
    of DeformX with its default rod-rod contact; both also without contact, to show what contact
    costs in each. Target: DeformX >= 10x faster.
-2. A 100-element rope lying on a ~100,000-triangle mesh (a grid floor; and a rope draped over a
+2. Scaling: n rods of 50 elements in a heap (rods crossing every few cm), explicit steps on one
+   thread, with and without rod-rod contact: contact cost per segment and step should stay
+   roughly flat as n grows (sort-and-sweep Verlet list).
+3. A 100-element rope lying on a ~100,000-triangle mesh (a grid floor; and a rope draped over a
    blob), explicit steps: the contact's cost per step (the step with the mesh minus the step
    without it) against the cost of the rod's internal forces (``rod_internal_loads`` timed
    alone). Target: contact <= 2x internal forces.
@@ -134,6 +137,23 @@ def internal_forces_seconds(world: dx.World, repeats: int, calls: int = 20000) -
     return best_of(once, repeats)
 
 
+def heap(n_rods: int, contact: bool) -> dx.World:
+    """``n_rods`` rods of 50 elements, 0.5 m, radius 5 mm, crossing in a heap on the ground."""
+    rng = np.random.default_rng(0)
+    world = dx.World(dt=2e-5, rod_contact=contact, threads=1)
+    side = 0.25 * np.sqrt(n_rods)  # constant density of rods per area
+    for k in range(n_rods):
+        angle = rng.uniform(0, np.pi)
+        d = np.array([np.cos(angle), np.sin(angle), 0.0])
+        centre = np.array([*rng.uniform(-side / 2, side / 2, 2), 0.006 + 0.011 * (k % 4)])
+        world.add_rod(dx.Rod.straight(n_elements=50, start=centre - 0.25 * d, direction=d,
+                                      length=0.5, radius=0.005, youngs_modulus=1e6,
+                                      density=1000.0, damping=5.0))
+    world.add_plane(friction=0.5)
+    world.run(0.02)
+    return world
+
+
 def rope_on_mesh(scene: str, with_mesh: bool):
     """A 100-element rope (r = 5 mm) at rest on a mesh, or the same rope alone."""
     from deformx.engine.geometry.shapes import blob_mesh, grid_mesh
@@ -155,7 +175,7 @@ def rope_on_mesh(scene: str, with_mesh: bool):
     n_tri = len(mesh[1]) if isinstance(mesh, tuple) else len(mesh.faces)
     if with_mesh:
         world.add_mesh(mesh, friction=0.5)
-        world.run(0.1)  # come to rest on it
+        world.run(0.1 if scene == "floor" else 0.6)  # come to rest on it (the blob: draped)
     else:
         world.gravity = np.zeros(3)
     return world, n_tri
@@ -201,7 +221,23 @@ def main() -> None:
     console.print(f"contact's share of a step: PyElastica {(c_pe - n_pe) / n_pe:.1f}x the rest "
                   f"of the step, DeformX {(c_ours - n_ours) / n_ours:.2f}x")
 
-    # 2. mesh contact cost
+    # 2. scaling of rod-rod contact
+    t = Table(title="Rod-rod contact cost vs size: n rods x 50 elements in a heap, explicit, "
+                    "one thread")
+    for col in ("rods", "segments", "step without", "step with rod contact",
+                "contact per segment-step", "candidate pairs"):
+        t.add_column(col, justify="right")
+    for n_rods in ((16, 64) if args.quick else (16, 64, 256)):
+        n_steps = max(20, steps * 4 // n_rods)
+        t_off = time_steps(heap(n_rods, False), n_steps, repeats)
+        w_on = heap(n_rods, True)
+        t_on = time_steps(w_on, n_steps, repeats)
+        t.add_row(str(n_rods), str(50 * n_rods), f"{t_off * 1e6:.0f} us", f"{t_on * 1e6:.0f} us",
+                  f"{(t_on - t_off) / (50 * n_rods) * 1e9:.0f} ns",
+                  str(w_on.contact_stats()["candidate_pairs"]))
+    console.print(t)
+
+    # 3. mesh contact cost
     t = Table(title="A 100-element rope at rest on a large mesh, explicit dt = 2e-5 s: contact "
                     "cost per step vs internal forces")
     for col in ("scene", "triangles", "step without mesh", "step with mesh",
