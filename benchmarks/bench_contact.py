@@ -138,14 +138,18 @@ def internal_forces_seconds(world: dx.World, repeats: int, calls: int = 20000) -
 
 
 def heap(n_rods: int, contact: bool) -> dx.World:
-    """``n_rods`` rods of 50 elements, 0.5 m, radius 5 mm, crossing in a heap on the ground."""
-    rng = np.random.default_rng(0)
+    """``n_rods`` rods of 50 elements, 0.5 m, radius 5 mm, in four crossing layers (parallel
+    rods within a layer, 45 degrees between layers) falling onto each other and the ground;
+    the area grows with ``n_rods`` so that the density of crossings stays the same."""
     world = dx.World(dt=2e-5, rod_contact=contact, threads=1)
-    side = 0.25 * np.sqrt(n_rods)  # constant density of rods per area
+    per_layer = max(1, n_rods // 4)
+    spacing = 1.0 / np.sqrt(n_rods)
     for k in range(n_rods):
-        angle = rng.uniform(0, np.pi)
+        layer, i = k % 4, k // 4
+        angle = layer * np.pi / 4
         d = np.array([np.cos(angle), np.sin(angle), 0.0])
-        centre = np.array([*rng.uniform(-side / 2, side / 2, 2), 0.006 + 0.011 * (k % 4)])
+        across = np.array([-d[1], d[0], 0.0])
+        centre = (i - (per_layer - 1) / 2) * spacing * across + (0, 0, 0.006 + 0.011 * layer)
         world.add_rod(dx.Rod.straight(n_elements=50, start=centre - 0.25 * d, direction=d,
                                       length=0.5, radius=0.005, youngs_modulus=1e6,
                                       density=1000.0, damping=5.0))
