@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import SimulationDiverged
 from . import validation as check
 from .contact import colliders as col
-from .contact.segments import query_cache
+from .contact.segments import P_AUTO, P_C, P_K, P_MUK, P_MUS, query_cache
 from .kernels import coupled, implicit, verlet
 from .layout import Block
 from .rod import Rod
@@ -160,21 +160,9 @@ class World:
         """
         p = check.vector3("point", point)
         n = check.vector3("normal", normal, unit=True)
-        auto = stiffness is None
-        k = 0.0 if auto else check.positive("stiffness", stiffness, "N/m")
-        c = -1.0 if damping is None else check.non_negative("damping", damping, "N s/m")
-        if friction is not None:
-            mu = check.non_negative("friction", friction)
-            mu_s = mu if static_friction is None else static_friction
-            mu_k = mu if kinetic_friction is None else kinetic_friction
-        else:
-            mu_s = 0.5 if static_friction is None else static_friction
-            mu_k = mu_s if kinetic_friction is None else kinetic_friction
-        mu_s = check.non_negative("static_friction", mu_s)
-        mu_k = check.non_negative("kinetic_friction", mu_k)
-        if mu_k > mu_s:
-            raise ValueError(f"kinetic_friction ({mu_k}) must be <= static_friction ({mu_s})")
-        self._planes.append(np.array([*p, *n, k, c, mu_s, mu_k, 1.0 if auto else 0.0]))
+        par = col.contact_params(stiffness, damping, friction, static_friction, kinetic_friction)
+        self._planes.append(np.array([*p, *n, par[P_K], par[P_C], par[P_MUS], par[P_MUK],
+                                      par[P_AUTO]]))
         self._planes_arr = np.array(self._planes)
         self._dirty = True
         return len(self._planes) - 1

@@ -270,6 +270,33 @@ def _centre_dist2(lo, hi, node, x) -> float:
 
 
 @njit(cache=True, error_model="numpy")
+def _corners(vertices, faces, f):
+    """The three corners (m) of triangle ``f`` as tuples."""
+    return ((vertices[faces[f, 0], 0], vertices[faces[f, 0], 1], vertices[faces[f, 0], 2]),
+            (vertices[faces[f, 1], 0], vertices[faces[f, 1], 1], vertices[faces[f, 1], 2]),
+            (vertices[faces[f, 2], 0], vertices[faces[f, 2], 1], vertices[faces[f, 2], 2]))
+
+
+@njit(cache=True, error_model="numpy")
+def _beyond(va, vb, vc, p0, p1, slo, shi, reach2) -> bool:
+    """True if triangle va-vb-vc is surely farther than sqrt(reach2) from segment p0p1.
+
+    Cheap cuts before the exact test: the triangle's box against the segment's box, then the
+    segment against a sphere around the triangle (tighter for segments running diagonally to
+    the axes, whose box is large).
+    """
+    g = _gap2(min(va[0], vb[0], vc[0]), max(va[0], vb[0], vc[0]), slo[0], shi[0])
+    g += _gap2(min(va[1], vb[1], vc[1]), max(va[1], vb[1], vc[1]), slo[1], shi[1])
+    g += _gap2(min(va[2], vb[2], vc[2]), max(va[2], vb[2], vc[2]), slo[2], shi[2])
+    if g > reach2:
+        return True
+    cen = bary_point(va, vb, vc, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)
+    rad = math.sqrt(max(dist2(cen, va), dist2(cen, vb), dist2(cen, vc)))
+    gap = math.sqrt(dist2(lerp(p0, p1, closest_point_segment(cen, p0, p1)), cen)) - rad
+    return gap > 0.0 and gap * gap > reach2
+
+
+@njit(cache=True, error_model="numpy")
 def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
                         max_dist, root=0):
     """Triangle nearest to segment p0p1 (tuples, m) among those within ``max_dist`` (m).
@@ -303,21 +330,8 @@ def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, face
         if a < 0:
             for i in range(start[node], start[node] + count[node]):
                 f = order[i]
-                va = (vertices[faces[f, 0], 0], vertices[faces[f, 0], 1], vertices[faces[f, 0], 2])
-                vb = (vertices[faces[f, 1], 0], vertices[faces[f, 1], 1], vertices[faces[f, 1], 2])
-                vc = (vertices[faces[f, 2], 0], vertices[faces[f, 2], 1], vertices[faces[f, 2], 2])
-                # Cheap cuts before the exact test: the triangle's box against the segment's,
-                # then the segment against a sphere around the triangle (tighter for segments
-                # running diagonally to the axes, whose box is large).
-                g = _gap2(min(va[0], vb[0], vc[0]), max(va[0], vb[0], vc[0]), slo[0], shi[0])
-                g += _gap2(min(va[1], vb[1], vc[1]), max(va[1], vb[1], vc[1]), slo[1], shi[1])
-                g += _gap2(min(va[2], vb[2], vc[2]), max(va[2], vb[2], vc[2]), slo[2], shi[2])
-                if g > best:
-                    continue
-                cen = bary_point(va, vb, vc, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)
-                rad = math.sqrt(max(dist2(cen, va), dist2(cen, vb), dist2(cen, vc)))
-                gap = math.sqrt(dist2(lerp(p0, p1, closest_point_segment(cen, p0, p1)), cen)) - rad
-                if gap > 0.0 and gap * gap > best:
+                va, vb, vc = _corners(vertices, faces, f)
+                if _beyond(va, vb, vc, p0, p1, slo, shi, best):
                     continue
                 s, u, v, w = closest_segment_triangle(p0, p1, va, vb, vc)
                 d2 = dist2(lerp(p0, p1, s), bary_point(va, vb, vc, u, v, w))
@@ -423,21 +437,9 @@ def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0,
         if a < 0:
             for i in range(start[node], start[node] + count[node]):
                 f = order[i]
-                va = (vertices[faces[f, 0], 0], vertices[faces[f, 0], 1], vertices[faces[f, 0], 2])
-                vb = (vertices[faces[f, 1], 0], vertices[faces[f, 1], 1], vertices[faces[f, 1], 2])
-                vc = (vertices[faces[f, 2], 0], vertices[faces[f, 2], 1], vertices[faces[f, 2], 2])
-                # Cheap cuts (as in bvh_closest_segment): beyond the horizon a triangle can
-                # neither enter the list nor lower the horizon.
-                h2 = horizon * horizon
-                g = _gap2(min(va[0], vb[0], vc[0]), max(va[0], vb[0], vc[0]), slo[0], shi[0])
-                g += _gap2(min(va[1], vb[1], vc[1]), max(va[1], vb[1], vc[1]), slo[1], shi[1])
-                g += _gap2(min(va[2], vb[2], vc[2]), max(va[2], vb[2], vc[2]), slo[2], shi[2])
-                if g > h2:
-                    continue
-                cen = bary_point(va, vb, vc, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0)
-                rad = math.sqrt(max(dist2(cen, va), dist2(cen, vb), dist2(cen, vc)))
-                gap = math.sqrt(dist2(lerp(p0, p1, closest_point_segment(cen, p0, p1)), cen)) - rad
-                if gap > 0.0 and gap * gap > h2:
+                va, vb, vc = _corners(vertices, faces, f)
+                # Beyond the horizon a triangle can neither enter the list nor lower it.
+                if _beyond(va, vb, vc, p0, p1, slo, shi, horizon * horizon):
                     continue
                 d = math.sqrt(segment_triangle_dist2(p0, p1, point, va, vb, vc)[4])
                 if d > horizon:
