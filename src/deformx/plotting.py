@@ -91,6 +91,17 @@ def _bounds(rods: Sequence[np.ndarray], planes_z: Sequence[float] = ()) -> np.nd
     return np.stack([lo - pad, hi + pad])
 
 
+def _style_view(ax, name, ylabel, bounds, i, j, ground_z) -> None:
+    """Title, labels, limits, grid and (in side views) the ground line of one view."""
+    if ground_z is not None and j == 2:
+        ax.axhline(ground_z, color="0.4", lw=1.0, ls="--")
+    _set_limits(ax, bounds, i, j)
+    ax.set_title(name)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+
+
 def _set_limits(ax, bounds, i, j):
     """Cover ``bounds`` in axes (i, j) with equal aspect, growing the shorter axis."""
     lo, hi = bounds
@@ -150,13 +161,7 @@ def plot_snapshots(
             label = labels[k] if labels is not None and k < len(labels) else f"rod {k}"
             ax.plot(last[:, i], last[:, j], color=rod_colors[k], lw=2.4, label=label if i == 0 and j == 2 else None)
             ax.plot(last[0, i], last[0, j], "o", color=rod_colors[k], ms=3)
-        if ground_z is not None and j == 2:
-            ax.axhline(ground_z, color="0.4", lw=1.0, ls="--")
-        _set_limits(ax, bounds, i, j)
-        ax.set_title(name)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel(ylabel)
-        ax.grid(True, alpha=0.3)
+        _style_view(ax, name, ylabel, bounds, i, j, ground_z)
     if len(rods) <= 10:
         axes[0].legend(loc="best", fontsize=8)
     sm = cm.ScalarMappable(norm=norm, cmap=cmap)
@@ -222,13 +227,7 @@ def write_video(
 
             handles = [Line2D([], [], color=f"C{k % 10}", lw=2.0) for k in range(len(rods))]
             ax.legend(handles, [str(x) for x in labels][: len(rods)], loc="upper right", fontsize=8)
-        if ground_z is not None and j == 2:
-            ax.axhline(ground_z, color="0.4", lw=1.0, ls="--")
-        _set_limits(ax, bounds, i, j)
-        ax.set_title(name)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel(ylabel)
-        ax.grid(True, alpha=0.3)
+        _style_view(ax, name, ylabel, bounds, i, j, ground_z)
     stamp = fig.text(0.01, 0.97, "", ha="left", va="top", family="monospace", animated=True)
     if title:
         fig.suptitle(title)

@@ -354,8 +354,8 @@ class World:
                 self._planes_arr)
             tail = (b.xn, b.vn, b.Qn, b.wn, b.fn_el, b.tn_el, b.anchor, b.anchor_on, b.c_plane,
                     b.c_stick, b.c_dir, b.stats, b.h_prev, b.rate, *self._contact_args())
-        # Arguments of the rod-group kernel and (without the times) of the one-rod kernel.
-        self._args = (*head, self._status, self._times, *tail)
+        # The one-rod kernel's arguments after (r, n_steps, t, dt, gravity, max_strain[,
+        # iterations, tolerance]) and before the rod-rod contact ones.
         self._rod_args = (*head, self._status, *tail)
         self._dirty = False
 
@@ -396,12 +396,13 @@ class World:
                      self._rod_contact_params)
         work = n_steps * int(b.rod_ne.sum())
         if len(self._groups) > 1 and work >= _MIN_THREADED_WORK:
-            futures = [_pool(len(self._groups)).submit(self._kernel, r0, r1, *args, *extra)
+            futures = [_pool(len(self._groups)).submit(self._kernel, r0, r1, *args, self._times,
+                                                       self._rod_args, *extra)
                        for r0, r1 in self._groups]
             for f in futures:
                 f.result()
         else:
-            self._kernel(0, n_rods, *args, *extra)
+            self._kernel(0, n_rods, *args, self._times, self._rod_args, *extra)
 
     def step(self, n_steps: int = 1) -> None:
         """Advance ``n_steps`` time steps (one kernel call for all rods and steps)."""
@@ -421,7 +422,7 @@ class World:
         args = (n_steps, self.time, self._dt, self.gravity, self.max_strain)
         if self.integrator == "stable":
             args += (self.iterations, self.tolerance)
-        self._advance(n_steps, args + self._args)
+        self._advance(n_steps, args)
         failed = np.flatnonzero(status[:, 0] != verlet.OK)
         if failed.size:
             # Report the rod that failed first; the world's state is not usable afterwards.

@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from ..geometry.closest import closest_segment_segment
+from .segments import _add_K
 
 
 @njit(cache=True, error_model="numpy")
@@ -227,12 +228,10 @@ def _spread(force, contact_force, a, b, s, f, sign):
 
 @njit(cache=True, error_model="numpy")
 def _add_stiffness(el_K, e, s, kn, n):
-    for i in range(3):
-        for j in range(3):
-            kij = kn * n[i] * n[j]
-            el_K[e, 0, i, j] += (1.0 - s) * (1.0 - s) * kij
-            el_K[e, 1, i, j] += (1.0 - s) * s * kij
-            el_K[e, 2, i, j] += s * s * kij
+    """Normal contact stiffness ``kn n n^T`` at parameter s of element e (node blocks)."""
+    _add_K(el_K, e, 0, (1.0 - s) * (1.0 - s), kn, 0.0, n)
+    _add_K(el_K, e, 1, (1.0 - s) * s, kn, 0.0, n)
+    _add_K(el_K, e, 2, s * s, kn, 0.0, n)
 
 
 @njit(cache=True, error_model="numpy")

@@ -451,17 +451,6 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     return count
 
 
-def empty_colliders() -> tuple:
-    """Collider tables of a world without meshes or primitives (the kernels' no-op input)."""
-    return (np.zeros(0, dtype=np.int64), np.zeros((0, 4, 4)), np.zeros((0, 6)),
-            np.zeros((0, N_PAR)), np.zeros((0, 6), dtype=np.int64), np.zeros((0, 3)),
-            np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3)),
-            np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
-            np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64),
-            np.zeros(0, dtype=np.int64), np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)),
-            *query_cache(0))
-
-
 def query_cache(n_slots: int) -> tuple:
     """Empty mesh query caches for ``n_slots`` queries (nodes, then elements): the collider
     (-1: none), the segment's ends when filled (m), the nearest triangles, their distances then

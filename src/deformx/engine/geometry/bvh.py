@@ -270,6 +270,22 @@ def _centre_dist2(lo, hi, node, x) -> float:
 
 
 @njit(cache=True, error_model="numpy")
+def _nearer_first(lo, hi, a, b, slo, shi, mid):
+    """Children a, b reordered nearer first, with their box gaps to the segment's box.
+
+    Near the surface both gaps are often 0; the box centres then decide.
+    """
+    ga = _box_gap2(lo, hi, a, slo, shi)
+    gb = _box_gap2(lo, hi, b, slo, shi)
+    swap = ga > gb
+    if ga == gb:
+        swap = _centre_dist2(lo, hi, a, mid) > _centre_dist2(lo, hi, b, mid)
+    if swap:
+        return b, a, gb, ga
+    return a, b, ga, gb
+
+
+@njit(cache=True, error_model="numpy")
 def _corners(vertices, faces, f):
     """The three corners (m) of triangle ``f`` as tuples."""
     return ((vertices[faces[f, 0], 0], vertices[faces[f, 0], 1], vertices[faces[f, 0], 2]),
@@ -343,16 +359,8 @@ def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, face
             if best <= 0.0 and tri >= 0:
                 break  # touching: nothing can be nearer
             continue
-        b = right[node]
-        ga = _box_gap2(lo, hi, a, slo, shi)
-        gb = _box_gap2(lo, hi, b, slo, shi)
-        # Near the surface both gaps are often 0; the box centres then decide which to try first.
-        swap = ga > gb
-        if ga == gb:
-            swap = _centre_dist2(lo, hi, a, mid) > _centre_dist2(lo, hi, b, mid)
-        if swap:  # push the farther child first so the nearer one is popped next
-            a, b = b, a
-            ga, gb = gb, ga
+        # Nearer child pushed last, so that it is searched first.
+        a, b, ga, gb = _nearer_first(lo, hi, a, right[node], slo, shi, mid)
         if gb <= best:
             stack[sp] = b
             bound[sp] = gb
@@ -459,15 +467,8 @@ def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0,
                 out_dist[j] = d
                 n += 1
             continue
-        b = right[node]
-        ga = _box_gap2(lo, hi, a, slo, shi)
-        gb = _box_gap2(lo, hi, b, slo, shi)
-        swap = ga > gb
-        if ga == gb:
-            swap = _centre_dist2(lo, hi, a, mid) > _centre_dist2(lo, hi, b, mid)
-        if swap:  # nearer child on top: the list fills with near triangles first
-            a, b = b, a
-            ga, gb = gb, ga
+        # Nearer child pushed last, so that it is searched first.
+        a, b, ga, gb = _nearer_first(lo, hi, a, right[node], slo, shi, mid)
         h2 = horizon * horizon
         if gb <= h2:
             stack[sp] = b

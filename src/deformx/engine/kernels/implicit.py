@@ -711,28 +711,14 @@ def advance_rod_implicit(
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def advance_rods_implicit(
-    r_begin, r_end, n_steps, t, dt, gravity, max_strain, max_iter, tol,
-    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_tau, rod_pcon, rod_fcon,
-    pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
-    Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
-    B, rest_vor, rest_kappa, kappa, couple,
-    scr_lab, scr_C, scr_X, scr_edot,
-    pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, times, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
-    cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
-    pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr,
-):
-    """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods."""
+def advance_rods_implicit(r_begin, r_end, n_steps, t, dt, gravity, max_strain, max_iter, tol,
+                          times, rod_args, pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius,
+                          xp, vp, rr):
+    """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods.
+
+    ``rod_args`` are :func:`advance_rod_implicit`'s arguments between ``tol`` and ``pairs``.
+    """
     for r in range(r_begin, r_end):
-        times[r] = advance_rod_implicit(
-            r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
-            rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_tau, rod_pcon, rod_fcon,
-            pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
-            Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
-            B, rest_vor, rest_kappa, kappa, couple,
-            scr_lab, scr_C, scr_X, scr_edot,
-            pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-            planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
-            cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
-            pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr)
+        times[r] = advance_rod_implicit(r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
+                                        *rod_args, pairs, n_pairs, seg_a, seg_b, seg_rod,
+                                        seg_radius, xp, vp, rr)

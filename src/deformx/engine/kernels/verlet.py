@@ -210,24 +210,12 @@ def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, forc
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def advance_rods(
-    r_begin, r_end, n_steps, t, dt, gravity, max_strain,
-    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
-    pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
-    Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
-    B, rest_vor, rest_kappa, kappa, couple,
-    scr_lab, scr_C, scr_X, scr_edot,
-    pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, times, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, extra, use_extra,
-):
-    """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods."""
+def advance_rods(r_begin, r_end, n_steps, t, dt, gravity, max_strain, times, rod_args, extra,
+                 use_extra):
+    """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods.
+
+    ``rod_args`` are :func:`advance_rod`'s arguments between ``max_strain`` and ``extra``.
+    """
     for r in range(r_begin, r_end):
-        times[r] = advance_rod(
-            r, n_steps, t, dt, gravity, max_strain,
-            rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
-            pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
-            Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
-            B, rest_vor, rest_kappa, kappa, couple,
-            scr_lab, scr_C, scr_X, scr_edot,
-            pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-            planes, status, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, extra, use_extra)
+        times[r] = advance_rod(r, n_steps, t, dt, gravity, max_strain, *rod_args, extra,
+                               use_extra)
