@@ -15,6 +15,7 @@ import pytest
 import trimesh
 
 import deformx as dx
+from deformx.engine.geometry.shapes import grid_mesh
 
 G = 9.81
 SETUPS = {"verlet": 2e-5, "stable": 1e-3}  # integrator: dt (s)
@@ -28,13 +29,7 @@ def rope(n: int, start, direction=(1.0, 0.0, 0.0), dl: float = 0.01, radius: flo
 
 def grid_floor(size: float = 1.0, n: int = 40) -> tuple[np.ndarray, np.ndarray]:
     """An open square grid mesh at z = 0 (2 n^2 triangles)."""
-    xs = np.linspace(-size / 2, size / 2, n + 1)
-    X, Y = np.meshgrid(xs, xs, indexing="ij")
-    V = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
-    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
-    F = np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
-    return V, F
+    return grid_mesh(size, n)
 
 
 def segment_box_distances(half: np.ndarray, pos: np.ndarray, samples: int = 41) -> np.ndarray:
@@ -223,3 +218,35 @@ def test_open_mesh_pushes_a_rope_back_to_its_own_side():
     world.run(0.05)
     assert np.all(below.positions[:, 2] < -0.9 * 0.002)
     assert np.all(above.positions[:, 2] > 0.9 * 0.002)
+
+
+def test_flat_patch_shortcut_agrees_with_the_exact_search():
+    """Nodes and segments over a flat patch skip the triangle tests (the nodes' heights above
+    the plane are their distances; segments add nothing to their ends). The same floor
+    roughened by 1e-7 m, beyond the coplanarity tolerance, takes the exact search: the
+    contact forces of a wavy, partly penetrating rope on a tilted floor agree."""
+    V, F = grid_mesh(0.6, 30)
+    angle = math.radians(10.0)
+    R = np.array([[1.0, 0.0, 0.0], [0.0, math.cos(angle), -math.sin(angle)],
+                  [0.0, math.sin(angle), math.cos(angle)]])
+    origin = np.array([0.1, -0.2, 0.3])
+    radius = 0.002
+    x = np.linspace(-0.2, 0.2, 41)
+    local = np.column_stack([x, 0.013 + 0.01 * np.sin(20 * x),
+                             radius * (0.8 + 0.15 * np.sin(37 * x))])  # 0.1-0.7 r deep
+    forces, flat = [], []
+    for roughness in (0.0, 1e-7):
+        Vr = V.copy()
+        Vr[:, 2] += roughness * np.random.default_rng(0).standard_normal(len(V))
+        world = dx.World(dt=1e-7, gravity=(0.0, 0.0, 0.0), rod_contact=False)
+        rod = world.add_rod(dx.Rod.from_points(local @ R.T + origin, radius=radius,
+                                               youngs_modulus=1e6, density=1000.0))
+        world.add_mesh((Vr, F), pose=(origin, R), friction=0.0)
+        world.step(2)  # the first step fills the query caches, the second uses them
+        forces.append(world.contact_forces(rod))
+        flat.append(world._cols[-2])  # per query: the flat patch's face, or -1
+    # Both paths ran (on the rough floor only queries over a single triangle stay "flat").
+    assert np.all(flat[0] >= 0) and np.mean(flat[1] < 0) > 0.5
+    scale = np.abs(forces[1]).max()
+    assert scale > 0.0
+    np.testing.assert_allclose(forces[0], forces[1], rtol=0.0, atol=1e-3 * scale)

@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import validation as check
 from ..geometry.bvh import bvh_from_mesh, pseudonormals
+from ..geometry.faces import face_frames
 from .primitives import BOX, CAPSULE, CYLINDER, SPHERE
 from .segments import (
     MESH,
@@ -212,7 +213,7 @@ def pack(colliders: Sequence[Collider]) -> tuple:
     twist = np.array([c._twist for c in colliders]).reshape(C, 6)
     par = np.array([c._params for c in colliders]).reshape(C, N_PAR)
     rng = np.zeros((C, 6), dtype=np.int64)
-    MV, MF, lo, hi, left, right, start, count, order, Fn, En, Vn = ([] for _ in range(12))
+    MV, MF, lo, hi, left, right, start, count, order, Fn, En, Vn, Fg = ([] for _ in range(13))
     nv = nf = nb = 0
     for i, c in enumerate(colliders):
         if c._mesh is None:
@@ -230,7 +231,7 @@ def pack(colliders: Sequence[Collider]) -> tuple:
                          (left, np.where(bvh.left >= 0, bvh.left + nb, -1)),
                          (right, np.where(bvh.right >= 0, bvh.right + nb, -1)),
                          (start, bvh.start + nf), (count, bvh.count), (order, bvh.order + nf),
-                         (Fn, fn), (En, en), (Vn, vn)):
+                         (Fn, fn), (En, en), (Vn, vn), (Fg, c._frames)):
             lst.append(arr)
         nv += V.shape[0]
         nf += F.shape[0]
@@ -244,11 +245,12 @@ def pack(colliders: Sequence[Collider]) -> tuple:
     return (kind, pose, twist, par, rng, cat(MV, (0, 3)), cat(MF, (0, 3), i64), cat(lo, (0, 3)),
             cat(hi, (0, 3)), cat(left, (0,), i64), cat(right, (0,), i64), cat(start, (0,), i64),
             cat(count, (0,), i64), cat(order, (0,), i64), cat(Fn, (0, 3)), cat(En, (0, 3, 3)),
-            cat(Vn, (0, 3)))
+            cat(Vn, (0, 3)), cat(Fg, (0, 3, 4)))
 
 
 def prepare_mesh(collider: Collider) -> None:
-    """Build the BVH and pseudonormals of a mesh collider (once)."""
+    """Build the BVH, pseudonormals and face frames of a mesh collider (once)."""
     V, F = collider._mesh
     collider._bvh = bvh_from_mesh(V, F)
     collider._normals = pseudonormals(V, F)
+    collider._frames = face_frames(V, F)

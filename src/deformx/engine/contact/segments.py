@@ -42,6 +42,9 @@ P_K, P_C, P_MUS, P_MUK, P_AUTO, P_TWO_SIDED, P_REPULSION, P_SHAPE = 0, 1, 2, 3, 
 N_PAR = 12
 QUERY_CACHE = 32  # nearest triangles kept per query
 _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment crosses a face)
+# Coplanarity tolerance of a flat patch, relative to the contact reach (5 nm for a 5 mm rope):
+# the largest penetration a near-flat patch's shortcut can misjudge.
+_FLAT_TOL = 1e-6
 
 
 @njit(cache=True, error_model="numpy")
@@ -61,9 +64,121 @@ def _rotate(pose, c, x0, x1, x2):
             pose[c, 2, 0] * x0 + pose[c, 2, 1] * x1 + pose[c, 2, 2] * x2)
 
 
+@njit(cache=True, error_model="numpy")
+def _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far, within, tol):
+    """The first cached face if every face within ``within`` (m) of the slot's segment lies in
+    its plane (to ``tol`` m, same orientation) and the cache holds all of them; else -1."""
+    if n == 0 or far < within:
+        return -1
+    ref = qc_tris[slot, 0]
+    g0, g1, g2, o = Fg[ref, 0, 0], Fg[ref, 0, 1], Fg[ref, 0, 2], Fg[ref, 0, 3]
+    for k in range(n):
+        if qc_dist[slot, k] > within:
+            break
+        f = qc_tris[slot, k]
+        if not Fg[f, 0, 0] * g0 + Fg[f, 0, 1] * g1 + Fg[f, 0, 2] * g2 > 0.0:
+            return -1  # turned over, degenerate (NaN) or not in the plane
+        for corner in range(3):
+            i = faces[f, corner]
+            if not abs(g0 * verts[i, 0] + g1 * verts[i, 1] + g2 * verts[i, 2] - o) <= tol:
+                return -1
+    return ref
+
+
+@njit(cache=True, error_model="numpy")
+def _patch_face(slot, end, x, within, Fg, qc_tris, qc_dist, qc_n, qc_hint):
+    """A cached face within ``within`` (m) whose plane projection of x contains it, and its
+    barycentrics (u, v, w); -1 if none. Tries the face that held end ``end`` last time first."""
+    hint = qc_hint[slot, end]
+    for j in range(-1, qc_n[slot]):
+        k = hint if j < 0 else j
+        if k < 0 or (j >= 0 and k == hint):
+            continue
+        if qc_dist[slot, k] > within:
+            if j < 0:
+                continue
+            break
+        f = qc_tris[slot, k]
+        v = Fg[f, 1, 0] * x[0] + Fg[f, 1, 1] * x[1] + Fg[f, 1, 2] * x[2] - Fg[f, 1, 3]
+        w = Fg[f, 2, 0] * x[0] + Fg[f, 2, 1] * x[1] + Fg[f, 2, 2] * x[2] - Fg[f, 2, 3]
+        u = 1.0 - v - w
+        if u >= 0.0 and v >= 0.0 and w >= 0.0:
+            qc_hint[slot, end] = k
+            return f, u, v, w
+    return -1, 0.0, 0.0, 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _inside(Fg, f, x) -> bool:
+    """Whether x projects into face f (see :mod:`deformx.engine.geometry.faces`)."""
+    v = Fg[f, 1, 0] * x[0] + Fg[f, 1, 1] * x[1] + Fg[f, 1, 2] * x[2] - Fg[f, 1, 3]
+    w = Fg[f, 2, 0] * x[0] + Fg[f, 2, 1] * x[1] + Fg[f, 2, 2] * x[2] - Fg[f, 2, 3]
+    return v >= 0.0 and w >= 0.0 and v + w <= 1.0
+
+
+@njit(cache=True, error_model="numpy")
+def _flat_ref(c, slot, la, lb, skin, qc_col, qc_pos, qc_flat, qc_hint) -> int:
+    """The flat patch's face of a slot whose cache is valid for local ends la, lb and whose
+    ends were last found over faces of the patch, else -1 (see ``_mesh_nearest``)."""
+    ref = qc_flat[slot]
+    if qc_col[slot] != c or ref < 0 or qc_hint[slot, 0] < 0:
+        return -1
+    moved = max(abs(la[0] - qc_pos[slot, 0]), abs(la[1] - qc_pos[slot, 1]),
+                abs(la[2] - qc_pos[slot, 2]), abs(lb[0] - qc_pos[slot, 3]),
+                abs(lb[1] - qc_pos[slot, 4]), abs(lb[2] - qc_pos[slot, 5]))
+    return ref if moved * math.sqrt(3.0) <= skin else -1
+
+
 @njit(cache=True, inline="always", error_model="numpy")
-def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, la, lb,
-                  reach, skin, qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n):
+def _flat_node(c, slot, p, reach, pose, par, Fg, qc_col, qc_pos, qc_tris, qc_flat, qc_hint):
+    """The flat-patch shortcut of ``_closest`` for a node still over the face that held it:
+    (decided, hit, signed distance, normal (world), surface point (world)).
+
+    Called straight from the contact loop rather than through ``_closest``: a function inlined
+    by numba increfs and decrefs every array it takes, which costs more than this whole test.
+    """
+    la = _to_local(pose, c, p[0], p[1], p[2])
+    ref = _flat_ref(c, slot, la, la, 0.5 * reach, qc_col, qc_pos, qc_flat, qc_hint)
+    if ref < 0 or not _inside(Fg, qc_tris[slot, qc_hint[slot, 0]], la):
+        return False, False, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+    g0, g1, g2 = Fg[ref, 0, 0], Fg[ref, 0, 1], Fg[ref, 0, 2]
+    h = g0 * la[0] + g1 * la[1] + g2 * la[2] - Fg[ref, 0, 3]
+    if abs(h) > reach:
+        return True, False, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+    if abs(h) <= _TINY:
+        return False, False, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+    # Closed meshes: signed (the face normal points out); open ones: towards the node.
+    sign = 1.0 if (par[c, P_TWO_SIDED] == 0.0 or h > 0.0) else -1.0
+    nw = _rotate(pose, c, sign * g0, sign * g1, sign * g2)
+    return True, True, sign * h, nw, (p[0] - sign * h * nw[0], p[1] - sign * h * nw[1],
+                                      p[2] - sign * h * nw[2])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _flat_clear(c, slot, pa, pb, reach, pose, par, Fg, qc_col, qc_pos, qc_tris, qc_flat,
+                qc_hint) -> bool:
+    """Whether segment pa-pb provably has no contact beyond what its ends carry, because it
+    lies on the outer side (either side of an open mesh) of a flat patch, with both ends
+    over faces of the patch or both farther than ``reach`` (m): its distance to the patch is
+    then at least the linear interpolation of its ends' (see ``_mesh_nearest``)."""
+    la = _to_local(pose, c, pa[0], pa[1], pa[2])
+    lb = _to_local(pose, c, pb[0], pb[1], pb[2])
+    ref = _flat_ref(c, slot, la, lb, 0.5 * reach, qc_col, qc_pos, qc_flat, qc_hint)
+    if ref < 0 or qc_hint[slot, 1] < 0:
+        return False
+    ha = Fg[ref, 0, 0] * la[0] + Fg[ref, 0, 1] * la[1] + Fg[ref, 0, 2] * la[2] - Fg[ref, 0, 3]
+    hb = Fg[ref, 0, 0] * lb[0] + Fg[ref, 0, 1] * lb[1] + Fg[ref, 0, 2] * lb[2] - Fg[ref, 0, 3]
+    if not ((ha > 0.0 and hb > 0.0) or (par[c, P_TWO_SIDED] != 0.0 and ha < 0.0 and hb < 0.0)):
+        return False
+    return min(abs(ha), abs(hb)) > reach or (
+        _inside(Fg, qc_tris[slot, qc_hint[slot, 0]], la)
+        and _inside(Fg, qc_tris[slot, qc_hint[slot, 1]], lb))
+
+
+@njit(cache=True, error_model="numpy")
+def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, Fg, la,
+                  lb, reach, skin, two_sided, qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n,
+                  qc_flat, qc_hint):
     """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache.
 
     The cache holds the triangles nearest to where the slot's segment was when it was filled,
@@ -74,11 +189,20 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     exact while the best found lies within the horizon minus ``delta``; otherwise, or after
     moving more than ``skin``, the cache is refilled. Also returns whether the cache was
     (re)filled or bypassed on this call. ``root``: the mesh's BVH root in the packed tables.
+
+    Flat patches (a floor, a table top, a box face) take a shortcut: when every triangle
+    within ``reach + skin`` of the filled segment lies in one plane (``qc_flat``), those are
+    the only ones that can come within ``reach`` before the next refill, so a point whose
+    projection falls in one of them is exactly its height above the plane away. A segment
+    above such a patch with both ends' projections in it, or farther than ``reach``, has no
+    contact beyond what its ends carry (its distance is at least the linear interpolation of
+    theirs), and gets -1: callers ask segments only for that excess.
     """
     point = la[0] == lb[0] and la[1] == lb[1] and la[2] == lb[2]
     moved = 0.0
     delta2 = 0.0
     fresh = False
+    within = reach + skin
     if qc_col[slot] == c:
         for d in range(3):
             moved = max(moved, abs(la[d] - qc_pos[slot, d]), abs(lb[d] - qc_pos[slot, 3 + d]))
@@ -88,15 +212,39 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     while True:
         if refill:
             n, far = bvh_nearest_k(lo, hi, left, right, start, count, order, verts, faces, la,
-                                   lb, reach + skin, qc_tris[slot], qc_dist[slot], root)
+                                   lb, within, qc_tris[slot], qc_dist[slot], root)
             fresh = True
             delta2 = 0.0
             qc_col[slot] = c
             qc_n[slot] = n
             qc_far[slot] = far
+            qc_flat[slot] = _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far, within,
+                                        _FLAT_TOL * reach)
+            qc_hint[slot, 0] = -1
+            qc_hint[slot, 1] = -1
             for d in range(3):
                 qc_pos[slot, d] = la[d]
                 qc_pos[slot, 3 + d] = lb[d]
+        ref = qc_flat[slot]
+        if ref >= 0:
+            ha = Fg[ref, 0, 0] * la[0] + Fg[ref, 0, 1] * la[1] + Fg[ref, 0, 2] * la[2] - Fg[ref, 0, 3]
+            if point:
+                f, u, v, w = _patch_face(slot, 0, la, within, Fg, qc_tris, qc_dist, qc_n, qc_hint)
+                if f >= 0:
+                    if ha * ha > reach * reach:
+                        return -1, 0.0, 0.0, 0.0, 0.0, np.inf, fresh
+                    return f, 0.0, u, v, w, ha * ha, fresh
+            else:
+                hb = (Fg[ref, 0, 0] * lb[0] + Fg[ref, 0, 1] * lb[1] + Fg[ref, 0, 2] * lb[2]
+                      - Fg[ref, 0, 3])
+                # On the outer side (either side of an open mesh) of the plane, not crossing it.
+                if (ha > 0.0 and hb > 0.0) or (two_sided and ha < 0.0 and hb < 0.0):
+                    if min(abs(ha), abs(hb)) > reach or (
+                            _patch_face(slot, 0, la, within, Fg, qc_tris, qc_dist, qc_n,
+                                        qc_hint)[0] >= 0
+                            and _patch_face(slot, 1, lb, within, Fg, qc_tris, qc_dist, qc_n,
+                                            qc_hint)[0] >= 0):
+                        return -1, 0.0, 0.0, 0.0, 0.0, np.inf, fresh
         delta = math.sqrt(delta2)
         best = reach * reach
         tri = -1
@@ -130,12 +278,13 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-             Border, Fn, En, Vn, qcache, slot, pa, pb, reach):
+             Border, Fn, En, Vn, Fg, qcache, slot, pa, pb, reach):
     """Deepest point of world segment pa-pb against collider ``c`` within ``reach`` (m).
 
     Returns (hit, s, signed distance of the segment axis, normal (world), surface point
-    (world)); hit is False when the segment is farther than ``reach``. ``slot`` names the
-    query (node i or element N + e) in the mesh query cache ``qcache``.
+    (world)); hit is False when the segment is farther than ``reach``, or (meshes) when it
+    provably touches nothing beyond what its ends touch (see ``_mesh_nearest``). ``slot``
+    names the query (node i or element N + e) in the mesh query cache ``qcache``.
     """
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
@@ -146,11 +295,13 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
         root = mesh_rng[c, 4]
         verts = MV
         faces = MF
-        qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n = qcache
+        qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n, qc_flat, qc_hint = qcache
         tri, s, u, v, w, d2, fresh = _mesh_nearest(c, slot, root, Blo, Bhi, Bleft, Bright,
-                                                   Bstart, Bcount, Border, verts, faces, la, lb,
-                                                   reach, 0.5 * reach, qc_col, qc_pos, qc_tris,
-                                                   qc_dist, qc_far, qc_n)
+                                                   Bstart, Bcount, Border, verts, faces, Fg, la,
+                                                   lb, reach, 0.5 * reach,
+                                                   par[c, P_TWO_SIDED] != 0.0, qc_col, qc_pos,
+                                                   qc_tris, qc_dist, qc_far, qc_n, qc_flat,
+                                                   qc_hint)
         if tri < 0 and fresh and par[c, P_TWO_SIDED] == 0.0 and par[c, P_REPULSION] > 0.0:
             # Nothing near the surface: the segment may still be inside a closed mesh, less
             # than the repulsion distance deep (checked when the cache is refilled, or on
@@ -230,7 +381,7 @@ def collider_penalty(par, c, mass, k_floor, dt_ref):
     return k, damp
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _one_contact(r, c, pose, twist, par, p, u, n, q, depth, m_c, k_floor, dt_ref, h, x_ref0,
                  anchor, anchor_col, slot, use_anchor, commit, wrench):
     """Force (N, world) of one contact of penetration ``depth`` at point ``p`` moving with
@@ -344,8 +495,9 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
     (kind, pose, twist, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-     Border, Fn, En, Vn, qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n) = cols
-    qcache = (qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n)
+     Border, Fn, En, Vn, Fg, qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n, qc_flat,
+     qc_hint) = cols
+    qcache = (qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n, qc_flat, qc_hint)
     n_col = kind.shape[0]
     n_nodes = pos.shape[0]
     for c in range(n_col):
@@ -360,9 +512,14 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         anchored = False
         for c in range(n_col):
             pen[i, c] = -1e30
-            hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft,
-                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, qcache, i,
-                                        p, p, radius)
+            done = False
+            if kind[c] == MESH and qc_flat[i] >= 0:  # (checked here: the call has a cost)
+                done, hit, sd, n, q = _flat_node(c, i, p, radius, pose, par, Fg, qc_col, qc_pos,
+                                                 qc_tris, qc_flat, qc_hint)
+            if not done:
+                hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi,
+                                            Bleft, Bright, Bstart, Bcount, Border, Fn, En, Vn, Fg,
+                                            qcache, i, p, p, radius)
             if not hit:
                 continue
             pen[i, c] = radius - sd
@@ -396,8 +553,12 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         pb = (pos[b, 0], pos[b, 1], pos[b, 2])
         anchored = False
         for c in range(n_col):
+            if kind[c] == MESH and qc_flat[n_nodes + e] >= 0 and _flat_clear(
+                    c, n_nodes + e, pa, pb, radius, pose, par, Fg, qc_col, qc_pos, qc_tris,
+                    qc_flat, qc_hint):
+                continue
             hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft,
-                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, qcache,
+                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, Fg, qcache,
                                         n_nodes + e, pa, pb, radius)
             if not hit or s <= 0.0 or s >= 1.0:
                 continue
@@ -454,7 +615,10 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
 def query_cache(n_slots: int) -> tuple:
     """Empty mesh query caches for ``n_slots`` queries (nodes, then elements): the collider
     (-1: none), the segment's ends when filled (m), the nearest triangles, their distances then
-    (m), the horizon (m) and the count (see ``_mesh_nearest``)."""
-    return (np.full(n_slots, -1, dtype=np.int64), np.zeros((n_slots, 6)),
-            np.zeros((n_slots, QUERY_CACHE), dtype=np.int64), np.zeros((n_slots, QUERY_CACHE)),
-            np.zeros(n_slots), np.zeros(n_slots, dtype=np.int64))
+    (m), the horizon (m), the count, the flat patch's face (-1: not flat) and, per end, the
+    cache entry whose face held it last (see ``_mesh_nearest``)."""
+    i64 = np.int64
+    return (np.full(n_slots, -1, dtype=i64), np.zeros((n_slots, 6)),
+            np.zeros((n_slots, QUERY_CACHE), dtype=i64), np.zeros((n_slots, QUERY_CACHE)),
+            np.zeros(n_slots), np.zeros(n_slots, dtype=i64), np.full(n_slots, -1, dtype=i64),
+            np.full((n_slots, 2), -1, dtype=i64))
