@@ -397,7 +397,7 @@ def _add_element_stiffness(A, e0, ne, nn, el_K):
                     A[0, 0, i, j] += el_K[e, 2, i, j]
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _implied_rates(n0, nn, e0, ne, h, pos, xn, Q, Qn, vel, omega):
     """Backward-Euler velocities of the iterate: (x - x_n) / h and log(Q Q_n^T) / h."""
     for i in range(n0, n0 + nn):
@@ -417,7 +417,7 @@ def advance_rod_implicit(
     pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
-    scr_lab, scr_C, scr_X, scr_edot,
+    scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
     cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
@@ -504,7 +504,7 @@ def advance_rod_implicit(
             rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                                pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                                rest_kappa, force, torque, dil, kappa, stress, couple,
-                               scr_lab, scr_C, scr_X, scr_edot)
+                               scr_C, scr_X, scr_edot)
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     fn_el[i, d] = force[i, d]
@@ -533,13 +533,13 @@ def advance_rod_implicit(
         it = 0
         update = math.inf  # so the second iteration reuses the first one's factor (chord)
         previous = math.inf
+        _implied_rates(n0, nn, e0, ne, hs, pos, xn, Q, Qn, vel, omega)
         while it < budget:
             it += 1
-            _implied_rates(n0, nn, e0, ne, hs, pos, xn, Q, Qn, vel, omega)
             rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                                pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                                rest_kappa, force, torque, dil, kappa, stress, couple,
-                               scr_lab, scr_C, scr_X, scr_edot)
+                               scr_C, scr_X, scr_edot)
             failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
             if failed != OK:
                 break
@@ -621,14 +621,21 @@ def advance_rod_implicit(
             step_scale = step_scale * 0.5 if update >= last_update else 1.0
             last_update = update
             update *= step_scale
-            # Apply the update: positions add, frames rotate by the material rotation vector.
+            # Apply the update: positions add, frames rotate by the material rotation vector;
+            # and the implied rates of the new iterate (as _implied_rates), while it is at hand.
             for i in range(nn):
                 g = n0 + i
                 for d in range(3):
                     pos[g, d] += step_scale * rhs[2 * i, d]
+                    vel[g, d] = (pos[g, d] - xn[g, d]) / hs
             for k in range(ne):
                 b = 2 * k + 1
-                rotate_directors(Q, e0 + k, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
+                e = e0 + k
+                rotate_directors(Q, e, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
+                w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
+                omega[e, 0] = w0 / hs
+                omega[e, 1] = w1 / hs
+                omega[e, 2] = w2 / hs
             # Convergence: what is left after this update is about rate * update, with the
             # contraction rate measured on this and earlier steps (CVODE's test), so smooth
             # steps can stop after one iteration. Not for a rod touching a plane, whose
@@ -673,8 +680,7 @@ def advance_rod_implicit(
             status[r, 1] = max(fail_at, 0)
             status[r, 2] = done
             return t
-        # Accepted: velocities, friction anchors and clamp rates at the new state.
-        _implied_rates(n0, nn, e0, ne, hs, pos, xn, Q, Qn, vel, omega)
+        # Accepted (velocities are the last iterate's): friction anchors and clamp rates.
         if has_planes:
             _contacts(FINISH, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
                       anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)
