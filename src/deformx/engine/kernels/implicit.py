@@ -398,7 +398,7 @@ def _add_element_stiffness(A, e0, ne, nn, el_K):
                     A[0, 0, i, j] += el_K[e, 2, i, j]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _implied_rates(n0, nn, e0, ne, inv_h, pos, xn, Q, Qn, vel, omega):
     """Backward-Euler velocities of the iterate: (x - x_n) / h and log(Q Q_n^T) / h."""
     for i in range(n0, n0 + nn):
