@@ -126,7 +126,7 @@ def internal_forces_seconds(world: dx.World, repeats: int, calls: int = 20000) -
     b = world._block
     args = (b.rod_node0, b.rod_elem0, b.rod_vor0, b.rod_ne, b.rod_closed, b.pos, b.vel, b.Q,
             b.omega, b.J, b.S, b.rest_len, b.rest_sigma, b.B, b.rest_vor, b.rest_kappa, b.force,
-            b.torque, b.dil, b.kappa, b.stress, b.couple, b.scr_lab, b.scr_C, b.scr_X,
+            b.torque, b.dil, b.kappa, b.stress, b.couple, b.scr_C, b.scr_X,
             b.scr_edot)
     loop(10, args)
 

@@ -56,7 +56,6 @@ class Block:
         self.torque = np.zeros((E, 3))
         self.dil = np.ones(E)
         self.stress = np.zeros((E, 3))
-        self.scr_lab = np.zeros((E, 3))
         self.scr_edot = np.zeros(E)
 
         # Stable integrator: state at the step start, friction anchors, Newton statistics.

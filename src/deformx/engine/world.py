@@ -336,7 +336,7 @@ class World:
                 b.rod_node0, b.rod_elem0, b.rod_vor0, b.rod_ne, b.rod_closed, decay, *common,
                 b.Q, b.omega, b.J, b.inv_J, b.S, b.rest_len, b.rest_sigma, b.text, b.torque,
                 b.dil, b.stress, b.B, b.rest_vor, b.rest_kappa, b.kappa, b.couple,
-                b.scr_lab, b.scr_C, b.scr_X, b.scr_edot,
+                b.scr_C, b.scr_X, b.scr_edot,
                 self._pcon_node, self._pcon_data, self._fcon_elem, self._fcon_Q0, self._fcon_data,
                 self._planes_arr)
             tail = self._contact_args()
@@ -349,7 +349,7 @@ class World:
                 *common,
                 b.Q, b.omega, b.J, b.S, b.rest_len, b.rest_sigma, b.text, b.torque,
                 b.dil, b.stress, b.B, b.rest_vor, b.rest_kappa, b.kappa, b.couple,
-                b.scr_lab, b.scr_C, b.scr_X, b.scr_edot,
+                b.scr_C, b.scr_X, b.scr_edot,
                 self._pcon_node, self._pcon_data, self._fcon_elem, self._fcon_Q0, self._fcon_data,
                 self._planes_arr)
             tail = (b.xn, b.vn, b.Qn, b.wn, b.fn_el, b.tn_el, b.anchor, b.anchor_on, b.c_plane,

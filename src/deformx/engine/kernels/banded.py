@@ -1,10 +1,11 @@
-"""Block-banded symmetric positive definite systems with 3x3 blocks (block Cholesky).
+"""Block-banded symmetric positive definite systems with 3x3 blocks (block L D L^T).
 
 One rod's Newton matrix in the order x0, phi0, x1, phi1, ... couples blocks at most two apart.
 ``A[I, d]`` holds the 3x3 block (I, I - d) for d = 0, 1, 2; of the diagonal blocks only the
 lower triangle is read. The factorisation runs in O(n) with fixed-size 3x3 kernels; afterwards
-``A[I, 0]`` holds the inverse of the diagonal Cholesky block (lower triangular), so both
-triangular sweeps only multiply.
+``A[I, 0]`` holds the inverse of the pivot block D_I, so the solve only multiplies. Each block
+row waits for the previous pivot, so the pivot's latency sets the speed: a cofactor inverse
+(one division) rather than a Cholesky of the block (three square roots and divisions in a chain).
 
 The kernels work on blocks held in tuples (registers): a block is read once and written once.
 Computing in place in ``A`` would make the compiler reload every operand after each store,
@@ -12,8 +13,6 @@ as it cannot tell that the blocks do not overlap.
 """
 
 from __future__ import annotations
-
-import math
 
 from numba import njit
 
@@ -69,95 +68,94 @@ def _sub_abt(m, x, y):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _sub_aat(s, x):
-    """Lower triangle of s - x @ x^T (``s`` and the result as in :func:`_load_lower`)."""
-    return (s[0] - (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]),
-            s[1] - (x[3] * x[0] + x[4] * x[1] + x[5] * x[2]),
-            s[2] - (x[3] * x[3] + x[4] * x[4] + x[5] * x[5]),
-            s[3] - (x[6] * x[0] + x[7] * x[1] + x[8] * x[2]),
-            s[4] - (x[6] * x[3] + x[7] * x[4] + x[8] * x[5]),
-            s[5] - (x[6] * x[6] + x[7] * x[7] + x[8] * x[8]))
+def _sub_abt_lower(s, x, y):
+    """Lower triangle of s - x @ y^T (``s`` and the result as in :func:`_load_lower`), for a
+    symmetric x @ y^T."""
+    return (s[0] - (x[0] * y[0] + x[1] * y[1] + x[2] * y[2]),
+            s[1] - (x[3] * y[0] + x[4] * y[1] + x[5] * y[2]),
+            s[2] - (x[3] * y[3] + x[4] * y[4] + x[5] * y[5]),
+            s[3] - (x[6] * y[0] + x[7] * y[1] + x[8] * y[2]),
+            s[4] - (x[6] * y[3] + x[7] * y[4] + x[8] * y[5]),
+            s[5] - (x[6] * y[6] + x[7] * y[7] + x[8] * y[8]))
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _times_inv_t(m, li):
-    """m @ Li^T, where ``li`` is an inverse lower Cholesky block as in :func:`_load_lower`."""
-    return (m[0] * li[0], m[0] * li[1] + m[1] * li[2], m[0] * li[3] + m[1] * li[4] + m[2] * li[5],
-            m[3] * li[0], m[3] * li[1] + m[4] * li[2], m[3] * li[3] + m[4] * li[4] + m[5] * li[5],
-            m[6] * li[0], m[6] * li[1] + m[7] * li[2], m[6] * li[3] + m[7] * li[4] + m[8] * li[5])
+def _times_sym(m, s):
+    """m @ S, ``S`` symmetric given by its lower triangle as in :func:`_load_lower`."""
+    return (m[0] * s[0] + m[1] * s[1] + m[2] * s[3], m[0] * s[1] + m[1] * s[2] + m[2] * s[4],
+            m[0] * s[3] + m[1] * s[4] + m[2] * s[5],
+            m[3] * s[0] + m[4] * s[1] + m[5] * s[3], m[3] * s[1] + m[4] * s[2] + m[5] * s[4],
+            m[3] * s[3] + m[4] * s[4] + m[5] * s[5],
+            m[6] * s[0] + m[7] * s[1] + m[8] * s[3], m[6] * s[1] + m[7] * s[2] + m[8] * s[4],
+            m[6] * s[3] + m[7] * s[4] + m[8] * s[5])
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _chol3_inverse(s):
-    """(ok, inverse of the lower Cholesky factor) of the 3x3 block whose lower triangle is
-    ``s`` (both as in :func:`_load_lower`); ok is False if it is not positive definite."""
-    a00 = s[0]
-    if not (a00 > 0.0):
+def _sym_inverse(s):
+    """(ok, inverse) of the symmetric 3x3 block whose lower triangle is ``s`` (both as in
+    :func:`_load_lower`); ok is False unless it is positive definite (leading minors > 0).
+
+    Cofactors over the determinant: one division, all products independent, so the pivot
+    that each block row waits for is short (sqrt/division chains would dominate).
+    """
+    a, b, d, c, e, f = s
+    m00 = d * f - e * e
+    m01 = c * e - b * f
+    m02 = b * e - c * d
+    minor2 = a * d - b * b
+    det = a * m00 + b * m01 + c * m02
+    if not (a > 0.0 and minor2 > 0.0 and det > 0.0):
         return False, s
-    l00 = math.sqrt(a00)
-    l10 = s[1] / l00
-    l20 = s[3] / l00
-    a11 = s[2] - l10 * l10
-    if not (a11 > 0.0):
-        return False, s
-    l11 = math.sqrt(a11)
-    l21 = (s[4] - l20 * l10) / l11
-    a22 = s[5] - l20 * l20 - l21 * l21
-    if not (a22 > 0.0):
-        return False, s
-    l22 = math.sqrt(a22)
-    i00 = 1.0 / l00
-    i11 = 1.0 / l11
-    i22 = 1.0 / l22
-    i10 = -l10 * i00 * i11
-    i21 = -l21 * i11 * i22
-    i20 = -(l20 * i00 + l21 * i10) * i22
-    return True, (i00, i10, i11, i20, i21, i22)
+    inv = 1.0 / det
+    return True, (m00 * inv, m01 * inv, (a * f - c * c) * inv, m02 * inv, (b * c - a * e) * inv,
+                  minor2 * inv)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _store_inverse(A, I, li) -> None:
-    """Store an inverse lower Cholesky block (as in :func:`_load_lower`) in A[I, 0], in full."""
-    store_block(A, I, 0, (li[0], 0.0, 0.0, li[1], li[2], 0.0, li[3], li[4], li[5]))
+def _store_sym(A, I, s) -> None:
+    """Store a symmetric block (lower triangle ``s`` as in :func:`_load_lower`) in A[I, 0]."""
+    store_block(A, I, 0, (s[0], s[1], s[3], s[1], s[2], s[4], s[3], s[4], s[5]))
 
 
 @njit(cache=True, error_model="numpy")
 def block_cholesky(A, nb) -> int:
-    """In-place block Cholesky of the first ``nb`` block rows; 0, or 1 + the first block row
-    whose pivot block is not positive definite.
+    """In-place square-root-free block Cholesky ``A = L D L^T`` (``L`` unit block lower
+    triangular) of the first ``nb`` block rows; 0, or 1 + the first block row whose pivot
+    block ``D_I`` is not positive definite (then ``A`` is not).
 
-    The factor blocks that the next rows need (the last two inverse diagonal blocks, the last
-    L[I, I-1]) are carried along in locals.
+    Afterwards ``A[I, 1]``, ``A[I, 2]`` hold L[I, I-1], L[I, I-2] and ``A[I, 0]`` holds D_I^-1.
+    The last two D^-1 and the last L[I, I-1] D_{I-1} are carried along in locals.
     """
     if nb < 1:
         return 0
-    ok, li2 = _chol3_inverse(_load_lower(A, 0))  # li2, li1: L^-1 of blocks I-2, I-1
+    ok, di2 = _sym_inverse(_load_lower(A, 0))  # di2, di1: D^-1 of blocks I-2, I-1
     if not ok:
         return 1
-    _store_inverse(A, 0, li2)
+    _store_sym(A, 0, di2)
     if nb < 2:
         return 0
-    # L[1, 0] = A[1, 0] L[0, 0]^-T
-    l1 = _times_inv_t(_load(A, 1, 1), li2)
+    u1 = _load(A, 1, 1)  # L[I-1, I-2] D_{I-2} (= the original A[I-1, I-2] for I = 2)
+    l1 = _times_sym(u1, di2)
     store_block(A, 1, 1, l1)
-    ok, li1 = _chol3_inverse(_sub_aat(_load_lower(A, 1), l1))
+    ok, di1 = _sym_inverse(_sub_abt_lower(_load_lower(A, 1), l1, u1))
     if not ok:
         return 2
-    _store_inverse(A, 1, li1)
+    _store_sym(A, 1, di1)
     for I in range(2, nb):
-        # L[I, I-2] = A[I, I-2] L[I-2, I-2]^-T
-        l2 = _times_inv_t(_load(A, I, 2), li2)
-        # L[I, I-1] = (A[I, I-1] - L[I, I-2] L[I-1, I-2]^T) L[I-1, I-1]^-T
-        l1 = _times_inv_t(_sub_abt(_load(A, I, 1), l2, l1), li1)
+        # L[I, I-2] D_{I-2} = A[I, I-2]; L[I, I-1] D_{I-1} = A[I, I-1] - L[I, I-2] D_{I-2} L[I-1, I-2]^T
+        u2 = _load(A, I, 2)
+        l2 = _times_sym(u2, di2)
+        u1 = _sub_abt(_load(A, I, 1), l2, u1)
+        l1 = _times_sym(u1, di1)
         store_block(A, I, 2, l2)
         store_block(A, I, 1, l1)
-        # Pivot block A[I, I] - L[I, I-1] L[I, I-1]^T - L[I, I-2] L[I, I-2]^T, lower triangle.
-        ok, li = _chol3_inverse(_sub_aat(_sub_aat(_load_lower(A, I), l1), l2))
+        # D_I = A[I, I] - L[I, I-1] D_{I-1} L[I, I-1]^T - L[I, I-2] D_{I-2} L[I, I-2]^T
+        ok, di = _sym_inverse(_sub_abt_lower(_sub_abt_lower(_load_lower(A, I), l1, u1), l2, u2))
         if not ok:
             return I + 1
-        _store_inverse(A, I, li)
-        li2 = li1
-        li1 = li
+        _store_sym(A, I, di)
+        di2 = di1
+        di1 = di
     return 0
 
 
@@ -179,25 +177,26 @@ def _sub_atx(r, m, x):
 
 @njit(cache=True, error_model="numpy")
 def block_solve(A, nb, x) -> None:
-    """Solve ``L L^T x = b`` in place (``x`` holds b, shape (nb, 3)) with the block factor.
+    """Solve ``L D L^T x = b`` in place (``x`` holds b, shape (nb, 3)) with the block factor.
 
     The last two solution blocks are carried along in locals rather than re-read from ``x``.
     """
-    # Forward: x_I = L_II^-1 (b_I - L[I, I-2] x_{I-2} - L[I, I-1] x_{I-1}).
-    p2 = (0.0, 0.0, 0.0)  # x_{I-2}
-    p1 = (0.0, 0.0, 0.0)  # x_{I-1}
+    # Forward: y_I = b_I - L[I, I-2] y_{I-2} - L[I, I-1] y_{I-1}; x_I <- D_I^-1 y_I.
+    p2 = (0.0, 0.0, 0.0)  # y_{I-2}
+    p1 = (0.0, 0.0, 0.0)  # y_{I-1}
     for I in range(nb):
-        r = (x[I, 0], x[I, 1], x[I, 2])
+        y = (x[I, 0], x[I, 1], x[I, 2])
         if I >= 2:
-            r = _sub_ax(r, _load(A, I, 2), p2)
+            y = _sub_ax(y, _load(A, I, 2), p2)
         if I >= 1:
-            r = _sub_ax(r, _load(A, I, 1), p1)
-        li = _load_lower(A, I)
-        y = (li[0] * r[0], li[1] * r[0] + li[2] * r[1], li[3] * r[0] + li[4] * r[1] + li[5] * r[2])
-        x[I, 0], x[I, 1], x[I, 2] = y
+            y = _sub_ax(y, _load(A, I, 1), p1)
+        di = _load_lower(A, I)
+        x[I, 0] = di[0] * y[0] + di[1] * y[1] + di[3] * y[2]
+        x[I, 1] = di[1] * y[0] + di[2] * y[1] + di[4] * y[2]
+        x[I, 2] = di[3] * y[0] + di[4] * y[1] + di[5] * y[2]
         p2 = p1
         p1 = y
-    # Backward: x_I = L_II^-T (y_I - L[I+1, I]^T x_{I+1} - L[I+2, I]^T x_{I+2}).
+    # Backward: x_I = D_I^-1 y_I - L[I+1, I]^T x_{I+1} - L[I+2, I]^T x_{I+2}.
     n1 = (0.0, 0.0, 0.0)  # x_{I+1}
     n2 = (0.0, 0.0, 0.0)  # x_{I+2}
     for I in range(nb - 1, -1, -1):
@@ -206,8 +205,6 @@ def block_solve(A, nb, x) -> None:
             r = _sub_atx(r, _load(A, I + 1, 1), n1)
         if I + 2 < nb:
             r = _sub_atx(r, _load(A, I + 2, 2), n2)
-        li = _load_lower(A, I)
-        y = (li[0] * r[0] + li[1] * r[1] + li[3] * r[2], li[2] * r[1] + li[4] * r[2], li[5] * r[2])
-        x[I, 0], x[I, 1], x[I, 2] = y
+        x[I, 0], x[I, 1], x[I, 2] = r
         n2 = n1
-        n1 = y
+        n1 = r

@@ -30,7 +30,7 @@ def rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed):
 def rod_internal_loads(
     r: int, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
     pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor, rest_kappa,
-    force, torque, dil, kappa, stress, couple, scr_lab, scr_C, scr_X, scr_edot,
+    force, torque, dil, kappa, stress, couple, scr_C, scr_X, scr_edot,
 ) -> None:
     """Write internal forces (lab, N) and torques (material, N m) of rod ``r``.
 
@@ -41,6 +41,7 @@ def rod_internal_loads(
     n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
 
     # Stretch / shear: element strain, stress, and the lab-frame stress Q^T n / e.
+    p0 = p1 = p2 = 0.0  # lab-frame stress of the element before
     for k in range(ne):
         a = n0 + k
         b = a + 1 if k + 1 < nn else n0  # wraps only on a closed rod (no integer modulo)
@@ -67,8 +68,16 @@ def rod_internal_loads(
         stress[e, 0] = n_0
         stress[e, 1] = n_1
         stress[e, 2] = n_2
-        for i in range(3):
-            scr_lab[e, i] = (Q[e, 0, i] * n_0 + Q[e, 1, i] * n_1 + Q[e, 2, i] * n_2) * inv_d
+        # Nodal forces: difference of the element stresses (free ends carry none), each node
+        # written once: its left element's stress is carried along.
+        f0 = (Q[e, 0, 0] * n_0 + Q[e, 1, 0] * n_1 + Q[e, 2, 0] * n_2) * inv_d
+        f1 = (Q[e, 0, 1] * n_0 + Q[e, 1, 1] * n_1 + Q[e, 2, 1] * n_2) * inv_d
+        f2 = (Q[e, 0, 2] * n_0 + Q[e, 1, 2] * n_1 + Q[e, 2, 2] * n_2) * inv_d
+        if k == 0:
+            force[a, 0], force[a, 1], force[a, 2] = f0, f1, f2
+        else:
+            force[a, 0], force[a, 1], force[a, 2] = f0 - p0, f1 - p1, f2 - p2
+        p0, p1, p2 = f0, f1, f2
         # (Q t x n) l0
         torque[e, 0] = (qt1 * n_2 - qt2 * n_1) * rest_len[e]
         torque[e, 1] = (qt2 * n_0 - qt0 * n_2) * rest_len[e]
@@ -79,18 +88,12 @@ def rod_internal_loads(
         dv2 = vel[b, 2] - vel[a, 2]
         scr_edot[e] = (dx0 * dv0 + dx1 * dv1 + dx2 * dv2) * inv_len * inv_l0
 
-    # Nodal forces: difference of the element stresses (free ends carry none).
-    for k in range(nn):
-        force[n0 + k, 0] = 0.0
-        force[n0 + k, 1] = 0.0
-        force[n0 + k, 2] = 0.0
-    for k in range(ne):
-        a = n0 + k
-        b = a + 1 if k + 1 < nn else n0
-        e = e0 + k
-        for i in range(3):
-            force[a, i] += scr_lab[e, i]
-            force[b, i] -= scr_lab[e, i]
+    if closed:
+        force[n0, 0] -= p0
+        force[n0, 1] -= p1
+        force[n0, 2] -= p2
+    else:
+        force[n0 + ne, 0], force[n0 + ne, 1], force[n0 + ne, 2] = -p0, -p1, -p2
 
     # Bend / twist at the Voronoi domains.
     for j in range(nv):

@@ -116,23 +116,24 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
         bphi = 2 * k + 1
         by = 0 if wrap else 2 * k + 2
         l0 = rest_len[e]
+        il0 = 1.0 / l0  # multiplications instead of a dozen divisions
         # a = Q dx / l0 (stretch times material tangent), n = material stress.
         dx0 = pos[ib, 0] - pos[ia, 0]
         dx1 = pos[ib, 1] - pos[ia, 1]
         dx2 = pos[ib, 2] - pos[ia, 2]
-        a0 = (Q[e, 0, 0] * dx0 + Q[e, 0, 1] * dx1 + Q[e, 0, 2] * dx2) / l0
-        a1 = (Q[e, 1, 0] * dx0 + Q[e, 1, 1] * dx1 + Q[e, 1, 2] * dx2) / l0
-        a2 = (Q[e, 2, 0] * dx0 + Q[e, 2, 1] * dx1 + Q[e, 2, 2] * dx2) / l0
+        a0 = (Q[e, 0, 0] * dx0 + Q[e, 0, 1] * dx1 + Q[e, 0, 2] * dx2) * il0
+        a1 = (Q[e, 1, 0] * dx0 + Q[e, 1, 1] * dx1 + Q[e, 1, 2] * dx2) * il0
+        a2 = (Q[e, 2, 0] * dx0 + Q[e, 2, 1] * dx1 + Q[e, 2, 2] * dx2) * il0
         n0_, n1_, n2_ = stress[e, 0] * kv, stress[e, 1] * kv, stress[e, 2] * kv
         if not geometric or n0_ * a0 + n1_ * a1 + n2_ * a2 <= 0.0:
             n0_, n1_, n2_ = 0.0, 0.0, 0.0
         Sk0, Sk1, Sk2 = S[e, 0] * kv, S[e, 1] * kv, S[e, 2] * kv
         # Node-node: Q^T S Q / l0 (exact: sigma is linear in positions at fixed frames).
-        K = (_qsq(Q, e, 0, 0, Sk0, Sk1, Sk2) / l0, _qsq(Q, e, 0, 1, Sk0, Sk1, Sk2) / l0,
-             _qsq(Q, e, 0, 2, Sk0, Sk1, Sk2) / l0, _qsq(Q, e, 1, 0, Sk0, Sk1, Sk2) / l0,
-             _qsq(Q, e, 1, 1, Sk0, Sk1, Sk2) / l0, _qsq(Q, e, 1, 2, Sk0, Sk1, Sk2) / l0,
-             _qsq(Q, e, 2, 0, Sk0, Sk1, Sk2) / l0, _qsq(Q, e, 2, 1, Sk0, Sk1, Sk2) / l0,
-             _qsq(Q, e, 2, 2, Sk0, Sk1, Sk2) / l0)
+        K = (_qsq(Q, e, 0, 0, Sk0, Sk1, Sk2) * il0, _qsq(Q, e, 0, 1, Sk0, Sk1, Sk2) * il0,
+             _qsq(Q, e, 0, 2, Sk0, Sk1, Sk2) * il0, _qsq(Q, e, 1, 0, Sk0, Sk1, Sk2) * il0,
+             _qsq(Q, e, 1, 1, Sk0, Sk1, Sk2) * il0, _qsq(Q, e, 1, 2, Sk0, Sk1, Sk2) * il0,
+             _qsq(Q, e, 2, 0, Sk0, Sk1, Sk2) * il0, _qsq(Q, e, 2, 1, Sk0, Sk1, Sk2) * il0,
+             _qsq(Q, e, 2, 2, Sk0, Sk1, Sk2) * il0)
         minus_K = (-K[0], -K[1], -K[2], -K[3], -K[4], -K[5], -K[6], -K[7], -K[8])
         # Node-rotation: H(x_b, phi) = Q^T C with C = S [a] - [n]; H(x_a, phi) = -H(x_b, phi).
         c01 = -Sk0 * a2 + n2_
@@ -398,16 +399,16 @@ def _add_element_stiffness(A, e0, ne, nn, el_K):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _implied_rates(n0, nn, e0, ne, h, pos, xn, Q, Qn, vel, omega):
+def _implied_rates(n0, nn, e0, ne, inv_h, pos, xn, Q, Qn, vel, omega):
     """Backward-Euler velocities of the iterate: (x - x_n) / h and log(Q Q_n^T) / h."""
     for i in range(n0, n0 + nn):
         for d in range(3):
-            vel[i, d] = (pos[i, d] - xn[i, d]) / h
+            vel[i, d] = (pos[i, d] - xn[i, d]) * inv_h
     for e in range(e0, e0 + ne):
         w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
-        omega[e, 0] = w0 / h
-        omega[e, 1] = w1 / h
-        omega[e, 2] = w2 / h
+        omega[e, 0] = w0 * inv_h
+        omega[e, 1] = w1 * inv_h
+        omega[e, 2] = w2 * inv_h
 
 
 @njit(cache=True, error_model="numpy")
@@ -417,7 +418,7 @@ def advance_rod_implicit(
     pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
-    scr_lab, scr_C, scr_X, scr_edot,
+    scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
     cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
@@ -500,11 +501,12 @@ def advance_rod_implicit(
                 for b in range(3):
                     Qn[e, a, b] = Q[e, a, b]
         kv = 1.0 + tau / hs
+        inv_hs = 1.0 / hs  # the per-node and per-element loops multiply
         if tau > 0.0:  # internal loads at the step start, for the viscous (rate) term
             rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                                pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                                rest_kappa, force, torque, dil, kappa, stress, couple,
-                               scr_lab, scr_C, scr_X, scr_edot)
+                               scr_C, scr_X, scr_edot)
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     fn_el[i, d] = force[i, d]
@@ -533,13 +535,13 @@ def advance_rod_implicit(
         it = 0
         update = math.inf  # so the second iteration reuses the first one's factor (chord)
         previous = math.inf
+        _implied_rates(n0, nn, e0, ne, inv_hs, pos, xn, Q, Qn, vel, omega)
         while it < budget:
             it += 1
-            _implied_rates(n0, nn, e0, ne, hs, pos, xn, Q, Qn, vel, omega)
             rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                                pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                                rest_kappa, force, torque, dil, kappa, stress, couple,
-                               scr_lab, scr_C, scr_X, scr_edot)
+                               scr_C, scr_X, scr_edot)
             failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
             if failed != OK:
                 break
@@ -565,12 +567,13 @@ def advance_rod_implicit(
             for i in range(nn):
                 g = n0 + i
                 for d in range(3):
-                    rhs[2 * i, d] = force[g, d] - mass[g] * ((vel[g, d] - vn[g, d]) / hs + nu * vel[g, d])
+                    rhs[2 * i, d] = force[g, d] - mass[g] * ((vel[g, d] - vn[g, d]) * inv_hs + nu * vel[g, d])
             for k in range(ne):
                 e = e0 + k
+                inv_dil = 1.0 / dil[e]
                 for d in range(3):
-                    rhs[2 * k + 1, d] = (torque[e, d] + text[e, d] - J[e, d] / dil[e] * (
-                        (omega[e, d] - wn[e, d]) / hs + nu * omega[e, d]))
+                    rhs[2 * k + 1, d] = (torque[e, d] + text[e, d] - J[e, d] * inv_dil * (
+                        (omega[e, d] - wn[e, d]) * inv_hs + nu * omega[e, d]))
             for q in range(nb):
                 if fixed[q]:
                     rhs[q, 0] = 0.0
@@ -621,14 +624,21 @@ def advance_rod_implicit(
             step_scale = step_scale * 0.5 if update >= last_update else 1.0
             last_update = update
             update *= step_scale
-            # Apply the update: positions add, frames rotate by the material rotation vector.
+            # Apply the update: positions add, frames rotate by the material rotation vector;
+            # and the implied rates of the new iterate (as _implied_rates), while it is at hand.
             for i in range(nn):
                 g = n0 + i
                 for d in range(3):
                     pos[g, d] += step_scale * rhs[2 * i, d]
+                    vel[g, d] = (pos[g, d] - xn[g, d]) * inv_hs
             for k in range(ne):
                 b = 2 * k + 1
-                rotate_directors(Q, e0 + k, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
+                e = e0 + k
+                rotate_directors(Q, e, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
+                w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
+                omega[e, 0] = w0 * inv_hs
+                omega[e, 1] = w1 * inv_hs
+                omega[e, 2] = w2 * inv_hs
             # Convergence: what is left after this update is about rate * update, with the
             # contraction rate measured on this and earlier steps (CVODE's test), so smooth
             # steps can stop after one iteration. Not for a rod touching a plane, whose
@@ -673,8 +683,7 @@ def advance_rod_implicit(
             status[r, 1] = max(fail_at, 0)
             status[r, 2] = done
             return t
-        # Accepted: velocities, friction anchors and clamp rates at the new state.
-        _implied_rates(n0, nn, e0, ne, hs, pos, xn, Q, Qn, vel, omega)
+        # Accepted (velocities are the last iterate's): friction anchors and clamp rates.
         if has_planes:
             _contacts(FINISH, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
                       anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)

@@ -94,7 +94,7 @@ def advance_rod(
     pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
     Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
     B, rest_vor, rest_kappa, kappa, couple,
-    scr_lab, scr_C, scr_X, scr_edot,
+    scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, extra, use_extra,
 ):
@@ -127,7 +127,7 @@ def advance_rod(
         rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
                            pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
                            rest_kappa, force, torque, dil, kappa, stress, couple,
-                           scr_lab, scr_C, scr_X, scr_edot)
+                           scr_C, scr_X, scr_edot)
         for i in range(n0, n0 + nn):
             force[i, 0] += mass[i] * g0 + fext[i, 0]
             force[i, 1] += mass[i] * g1 + fext[i, 1]
