@@ -41,6 +41,9 @@ MESH = 0
 P_K, P_C, P_MUS, P_MUK, P_AUTO, P_TWO_SIDED, P_REPULSION, P_SHAPE = 0, 1, 2, 3, 4, 5, 6, 7
 N_PAR = 12
 QUERY_CACHE = 32  # nearest triangles kept per query
+# Query cache columns (see ``query_cache``): integers, then floats.
+Q_COL, Q_N, Q_FLAT, Q_HINT = 0, 1, 2, 3
+Q_FAR = 6
 _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment crosses a face)
 # Coplanarity tolerance of a flat patch, relative to the contact reach (5 nm for a 5 mm rope):
 # the largest penetration a near-flat patch's shortcut can misjudge.
@@ -86,11 +89,11 @@ def _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far, within, tol):
 
 
 @njit(cache=True, error_model="numpy")
-def _patch_face(slot, end, x, within, Fg, qc_tris, qc_dist, qc_n, qc_hint):
+def _patch_face(slot, end, x, within, Fg, qc_tris, qc_dist, qc_meta):
     """A cached face within ``within`` (m) whose plane projection of x contains it, and its
     barycentrics (u, v, w); -1 if none. Tries the face that held end ``end`` last time first."""
-    hint = qc_hint[slot, end]
-    for j in range(-1, qc_n[slot]):
+    hint = qc_meta[slot, Q_HINT + end]
+    for j in range(-1, qc_meta[slot, Q_N]):
         k = hint if j < 0 else j
         if k < 0 or (j >= 0 and k == hint):
             continue
@@ -103,7 +106,7 @@ def _patch_face(slot, end, x, within, Fg, qc_tris, qc_dist, qc_n, qc_hint):
         w = Fg[f, 2, 0] * x[0] + Fg[f, 2, 1] * x[1] + Fg[f, 2, 2] * x[2] - Fg[f, 2, 3]
         u = 1.0 - v - w
         if u >= 0.0 and v >= 0.0 and w >= 0.0:
-            qc_hint[slot, end] = k
+            qc_meta[slot, Q_HINT + end] = k
             return f, u, v, w
     return -1, 0.0, 0.0, 0.0
 
@@ -117,20 +120,20 @@ def _inside(Fg, f, x) -> bool:
 
 
 @njit(cache=True, error_model="numpy")
-def _flat_ref(c, slot, la, lb, skin, qc_col, qc_pos, qc_flat, qc_hint) -> int:
+def _flat_ref(c, slot, la, lb, skin, qc_meta, qc_geo) -> int:
     """The flat patch's face of a slot whose cache is valid for local ends la, lb and whose
     ends were last found over faces of the patch, else -1 (see ``_mesh_nearest``)."""
-    ref = qc_flat[slot]
-    if qc_col[slot] != c or ref < 0 or qc_hint[slot, 0] < 0:
+    ref = qc_meta[slot, Q_FLAT]
+    if qc_meta[slot, Q_COL] != c or ref < 0 or qc_meta[slot, Q_HINT] < 0:
         return -1
-    moved = max(abs(la[0] - qc_pos[slot, 0]), abs(la[1] - qc_pos[slot, 1]),
-                abs(la[2] - qc_pos[slot, 2]), abs(lb[0] - qc_pos[slot, 3]),
-                abs(lb[1] - qc_pos[slot, 4]), abs(lb[2] - qc_pos[slot, 5]))
+    moved = max(abs(la[0] - qc_geo[slot, 0]), abs(la[1] - qc_geo[slot, 1]),
+                abs(la[2] - qc_geo[slot, 2]), abs(lb[0] - qc_geo[slot, 3]),
+                abs(lb[1] - qc_geo[slot, 4]), abs(lb[2] - qc_geo[slot, 5]))
     return ref if moved * math.sqrt(3.0) <= skin else -1
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _flat_node(c, slot, p, reach, pose, par, Fg, qc_col, qc_pos, qc_tris, qc_flat, qc_hint):
+def _flat_node(c, slot, p, reach, pose, par, Fg, qc_meta, qc_geo, qc_tris):
     """The flat-patch shortcut of ``_closest`` for a node still over the face that held it:
     (decided, hit, signed distance, normal (world), surface point (world)).
 
@@ -138,8 +141,8 @@ def _flat_node(c, slot, p, reach, pose, par, Fg, qc_col, qc_pos, qc_tris, qc_fla
     by numba increfs and decrefs every array it takes, which costs more than this whole test.
     """
     la = _to_local(pose, c, p[0], p[1], p[2])
-    ref = _flat_ref(c, slot, la, la, 0.5 * reach, qc_col, qc_pos, qc_flat, qc_hint)
-    if ref < 0 or not _inside(Fg, qc_tris[slot, qc_hint[slot, 0]], la):
+    ref = _flat_ref(c, slot, la, la, 0.5 * reach, qc_meta, qc_geo)
+    if ref < 0 or not _inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT]], la):
         return False, False, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
     g0, g1, g2 = Fg[ref, 0, 0], Fg[ref, 0, 1], Fg[ref, 0, 2]
     h = g0 * la[0] + g1 * la[1] + g2 * la[2] - Fg[ref, 0, 3]
@@ -155,30 +158,28 @@ def _flat_node(c, slot, p, reach, pose, par, Fg, qc_col, qc_pos, qc_tris, qc_fla
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _flat_clear(c, slot, pa, pb, reach, pose, par, Fg, qc_col, qc_pos, qc_tris, qc_flat,
-                qc_hint) -> bool:
+def _flat_clear(c, slot, pa, pb, reach, pose, par, Fg, qc_meta, qc_geo, qc_tris) -> bool:
     """Whether segment pa-pb provably has no contact beyond what its ends carry, because it
     lies on the outer side (either side of an open mesh) of a flat patch, with both ends
     over faces of the patch or both farther than ``reach`` (m): its distance to the patch is
     then at least the linear interpolation of its ends' (see ``_mesh_nearest``)."""
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
-    ref = _flat_ref(c, slot, la, lb, 0.5 * reach, qc_col, qc_pos, qc_flat, qc_hint)
-    if ref < 0 or qc_hint[slot, 1] < 0:
+    ref = _flat_ref(c, slot, la, lb, 0.5 * reach, qc_meta, qc_geo)
+    if ref < 0 or qc_meta[slot, Q_HINT + 1] < 0:
         return False
     ha = Fg[ref, 0, 0] * la[0] + Fg[ref, 0, 1] * la[1] + Fg[ref, 0, 2] * la[2] - Fg[ref, 0, 3]
     hb = Fg[ref, 0, 0] * lb[0] + Fg[ref, 0, 1] * lb[1] + Fg[ref, 0, 2] * lb[2] - Fg[ref, 0, 3]
     if not ((ha > 0.0 and hb > 0.0) or (par[c, P_TWO_SIDED] != 0.0 and ha < 0.0 and hb < 0.0)):
         return False
     return min(abs(ha), abs(hb)) > reach or (
-        _inside(Fg, qc_tris[slot, qc_hint[slot, 0]], la)
-        and _inside(Fg, qc_tris[slot, qc_hint[slot, 1]], lb))
+        _inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT]], la)
+        and _inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT + 1]], lb))
 
 
 @njit(cache=True, error_model="numpy")
 def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, Fg, la,
-                  lb, reach, skin, two_sided, qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n,
-                  qc_flat, qc_hint):
+                  lb, reach, skin, two_sided, qc_meta, qc_geo, qc_tris, qc_dist):
     """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache.
 
     The cache holds the triangles nearest to where the slot's segment was when it was filled,
@@ -191,7 +192,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     (re)filled or bypassed on this call. ``root``: the mesh's BVH root in the packed tables.
 
     Flat patches (a floor, a table top, a box face) take a shortcut: when every triangle
-    within ``reach + skin`` of the filled segment lies in one plane (``qc_flat``), those are
+    within ``reach + skin`` of the filled segment lies in one plane (column ``Q_FLAT``), those are
     the only ones that can come within ``reach`` before the next refill, so a point whose
     projection falls in one of them is exactly its height above the plane away. A segment
     above such a patch with both ends' projections in it, or farther than ``reach``, has no
@@ -203,33 +204,33 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     delta2 = 0.0
     fresh = False
     within = reach + skin
-    if qc_col[slot] == c:
+    if qc_meta[slot, Q_COL] == c:
         for d in range(3):
-            moved = max(moved, abs(la[d] - qc_pos[slot, d]), abs(lb[d] - qc_pos[slot, 3 + d]))
-        delta2 = max(dist2(la, (qc_pos[slot, 0], qc_pos[slot, 1], qc_pos[slot, 2])),
-                     dist2(lb, (qc_pos[slot, 3], qc_pos[slot, 4], qc_pos[slot, 5])))
-    refill = qc_col[slot] != c or moved * math.sqrt(3.0) > skin
+            moved = max(moved, abs(la[d] - qc_geo[slot, d]), abs(lb[d] - qc_geo[slot, 3 + d]))
+        delta2 = max(dist2(la, (qc_geo[slot, 0], qc_geo[slot, 1], qc_geo[slot, 2])),
+                     dist2(lb, (qc_geo[slot, 3], qc_geo[slot, 4], qc_geo[slot, 5])))
+    refill = qc_meta[slot, Q_COL] != c or moved * math.sqrt(3.0) > skin
     while True:
         if refill:
             n, far = bvh_nearest_k(lo, hi, left, right, start, count, order, verts, faces, la,
                                    lb, within, qc_tris[slot], qc_dist[slot], root)
             fresh = True
             delta2 = 0.0
-            qc_col[slot] = c
-            qc_n[slot] = n
-            qc_far[slot] = far
-            qc_flat[slot] = _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far, within,
+            qc_meta[slot, Q_COL] = c
+            qc_meta[slot, Q_N] = n
+            qc_geo[slot, Q_FAR] = far
+            qc_meta[slot, Q_FLAT] = _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far, within,
                                         _FLAT_TOL * reach)
-            qc_hint[slot, 0] = -1
-            qc_hint[slot, 1] = -1
+            qc_meta[slot, Q_HINT] = -1
+            qc_meta[slot, Q_HINT + 1] = -1
             for d in range(3):
-                qc_pos[slot, d] = la[d]
-                qc_pos[slot, 3 + d] = lb[d]
-        ref = qc_flat[slot]
+                qc_geo[slot, d] = la[d]
+                qc_geo[slot, 3 + d] = lb[d]
+        ref = qc_meta[slot, Q_FLAT]
         if ref >= 0:
             ha = Fg[ref, 0, 0] * la[0] + Fg[ref, 0, 1] * la[1] + Fg[ref, 0, 2] * la[2] - Fg[ref, 0, 3]
             if point:
-                f, u, v, w = _patch_face(slot, 0, la, within, Fg, qc_tris, qc_dist, qc_n, qc_hint)
+                f, u, v, w = _patch_face(slot, 0, la, within, Fg, qc_tris, qc_dist, qc_meta)
                 if f >= 0:
                     if ha * ha > reach * reach:
                         return -1, 0.0, 0.0, 0.0, 0.0, np.inf, fresh
@@ -240,16 +241,16 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
                 # On the outer side (either side of an open mesh) of the plane, not crossing it.
                 if (ha > 0.0 and hb > 0.0) or (two_sided and ha < 0.0 and hb < 0.0):
                     if min(abs(ha), abs(hb)) > reach or (
-                            _patch_face(slot, 0, la, within, Fg, qc_tris, qc_dist, qc_n,
-                                        qc_hint)[0] >= 0
-                            and _patch_face(slot, 1, lb, within, Fg, qc_tris, qc_dist, qc_n,
-                                            qc_hint)[0] >= 0):
+                            _patch_face(slot, 0, la, within, Fg, qc_tris, qc_dist,
+                                        qc_meta)[0] >= 0
+                            and _patch_face(slot, 1, lb, within, Fg, qc_tris, qc_dist,
+                                            qc_meta)[0] >= 0):
                         return -1, 0.0, 0.0, 0.0, 0.0, np.inf, fresh
         delta = math.sqrt(delta2)
         best = reach * reach
         tri = -1
         rs = ru = rv = rw = 0.0
-        for k in range(qc_n[slot]):
+        for k in range(qc_meta[slot, Q_N]):
             low = qc_dist[slot, k] - delta
             if low > 0.0 and low * low > best:
                 break  # sorted: no later triangle can be nearer either
@@ -262,11 +263,11 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
                 best = d2
                 tri = f
                 rs, ru, rv, rw = s, u, v, w
-        low = qc_far[slot] - delta
+        low = qc_geo[slot, Q_FAR] - delta
         if low > 0.0 and low * low > best:
             break  # no triangle left out of the cache can be as near
         if fresh:  # more than the cache's size tie at the nearest distance: search the tree
-            qc_col[slot] = -1
+            qc_meta[slot, Q_COL] = -1
             tri, s, u, v, w, d2 = bvh_closest_segment(lo, hi, left, right, start, count, order,
                                                       verts, faces, la, lb, reach, root)
             return tri, s, u, v, w, d2, True
@@ -295,13 +296,12 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
         root = mesh_rng[c, 4]
         verts = MV
         faces = MF
-        qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n, qc_flat, qc_hint = qcache
+        qc_meta, qc_geo, qc_tris, qc_dist = qcache
         tri, s, u, v, w, d2, fresh = _mesh_nearest(c, slot, root, Blo, Bhi, Bleft, Bright,
                                                    Bstart, Bcount, Border, verts, faces, Fg, la,
                                                    lb, reach, 0.5 * reach,
-                                                   par[c, P_TWO_SIDED] != 0.0, qc_col, qc_pos,
-                                                   qc_tris, qc_dist, qc_far, qc_n, qc_flat,
-                                                   qc_hint)
+                                                   par[c, P_TWO_SIDED] != 0.0, qc_meta,
+                                                   qc_geo, qc_tris, qc_dist)
         if tri < 0 and fresh and par[c, P_TWO_SIDED] == 0.0 and par[c, P_REPULSION] > 0.0:
             # Nothing near the surface: the segment may still be inside a closed mesh, less
             # than the repulsion distance deep (checked when the cache is refilled, or on
@@ -320,7 +320,7 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
                 if signed_side(Fn, En, Vn, faces, tri, u, v, w, p, q) > 0.0:
                     tri = -1  # outside and clear of the surface
                 else:
-                    qc_col[slot] = -1  # deep inside: search afresh until it is out
+                    qc_meta[slot, Q_COL] = -1  # deep inside: search afresh until it is out
         if tri < 0:
             return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
         ia, ib, ic = faces[tri, 0], faces[tri, 1], faces[tri, 2]
@@ -495,9 +495,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
     (kind, pose, twist, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-     Border, Fn, En, Vn, Fg, qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n, qc_flat,
-     qc_hint) = cols
-    qcache = (qc_col, qc_pos, qc_tris, qc_dist, qc_far, qc_n, qc_flat, qc_hint)
+     Border, Fn, En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist) = cols
+    qcache = (qc_meta, qc_geo, qc_tris, qc_dist)
     n_col = kind.shape[0]
     n_nodes = pos.shape[0]
     for c in range(n_col):
@@ -513,9 +512,9 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         for c in range(n_col):
             pen[i, c] = -1e30
             done = False
-            if kind[c] == MESH and qc_flat[i] >= 0:  # (checked here: the call has a cost)
-                done, hit, sd, n, q = _flat_node(c, i, p, radius, pose, par, Fg, qc_col, qc_pos,
-                                                 qc_tris, qc_flat, qc_hint)
+            if kind[c] == MESH and qc_meta[i, Q_FLAT] >= 0:  # (checked here: the call has a cost)
+                done, hit, sd, n, q = _flat_node(c, i, p, radius, pose, par, Fg, qc_meta,
+                                                 qc_geo, qc_tris)
             if not done:
                 hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi,
                                             Bleft, Bright, Bstart, Bcount, Border, Fn, En, Vn, Fg,
@@ -553,9 +552,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         pb = (pos[b, 0], pos[b, 1], pos[b, 2])
         anchored = False
         for c in range(n_col):
-            if kind[c] == MESH and qc_flat[n_nodes + e] >= 0 and _flat_clear(
-                    c, n_nodes + e, pa, pb, radius, pose, par, Fg, qc_col, qc_pos, qc_tris,
-                    qc_flat, qc_hint):
+            if kind[c] == MESH and qc_meta[n_nodes + e, Q_FLAT] >= 0 and _flat_clear(
+                    c, n_nodes + e, pa, pb, radius, pose, par, Fg, qc_meta, qc_geo, qc_tris):
                 continue
             hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft,
                                         Bright, Bstart, Bcount, Border, Fn, En, Vn, Fg, qcache,
@@ -613,12 +611,12 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
 
 
 def query_cache(n_slots: int) -> tuple:
-    """Empty mesh query caches for ``n_slots`` queries (nodes, then elements): the collider
-    (-1: none), the segment's ends when filled (m), the nearest triangles, their distances then
-    (m), the horizon (m), the count, the flat patch's face (-1: not flat) and, per end, the
-    cache entry whose face held it last (see ``_mesh_nearest``)."""
-    i64 = np.int64
-    return (np.full(n_slots, -1, dtype=i64), np.zeros((n_slots, 6)),
-            np.zeros((n_slots, QUERY_CACHE), dtype=i64), np.zeros((n_slots, QUERY_CACHE)),
-            np.zeros(n_slots), np.zeros(n_slots, dtype=i64), np.full(n_slots, -1, dtype=i64),
-            np.full((n_slots, 2), -1, dtype=i64))
+    """Empty mesh query caches for ``n_slots`` queries (nodes, then elements; see
+    ``_mesh_nearest``): per query the integers (collider (-1: none), count, the flat patch's
+    face (-1: not flat), and per end the cache entry whose face held it last (-1: none)), the
+    floats (the segment's ends when filled (m), the horizon (m)), the nearest triangles and
+    their distances then (m)."""
+    meta = np.full((n_slots, 5), -1, dtype=np.int64)
+    meta[:, Q_N] = 0
+    return (meta, np.zeros((n_slots, 7)), np.zeros((n_slots, QUERY_CACHE), dtype=np.int64),
+            np.zeros((n_slots, QUERY_CACHE)))
