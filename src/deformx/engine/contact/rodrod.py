@@ -157,13 +157,17 @@ def pair_contact(i, j, seg_a, seg_b, radius, pos_i, pos_j, vel_i, vel_j, mass, n
     p1 = (pos_i[b, 0], pos_i[b, 1], pos_i[b, 2])
     q0 = (pos_j[c_, 0], pos_j[c_, 1], pos_j[c_, 2])
     q1 = (pos_j[d_, 0], pos_j[d_, 1], pos_j[d_, 2])
+    reach = radius[i] + radius[j]
+    zero = (0.0, 0.0, 0.0)
+    for k in range(3):  # boxes apart by the reach on an axis: most Verlet-list pairs, cheaply
+        if (min(p0[k], p1[k]) - max(q0[k], q1[k]) >= reach
+                or min(q0[k], q1[k]) - max(p0[k], p1[k]) >= reach):
+            return False, 0.0, 0.0, zero, zero, 0.0, 0.0
     s, t = closest_segment_segment(p0, p1, q0, q1)
     x0 = p0[0] + s * (p1[0] - p0[0]) - q0[0] - t * (q1[0] - q0[0])
     x1 = p0[1] + s * (p1[1] - p0[1]) - q0[1] - t * (q1[1] - q0[1])
     x2 = p0[2] + s * (p1[2] - p0[2]) - q0[2] - t * (q1[2] - q0[2])
     dist = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-    reach = radius[i] + radius[j]
-    zero = (0.0, 0.0, 0.0)
     if dist >= reach or dist <= 1e-14 * reach:
         return False, s, t, zero, zero, 0.0, 0.0
     n = (x0 / dist, x1 / dist, x2 / dist)

@@ -45,9 +45,11 @@ def advance_world_verlet(n_steps, t, dt, gravity, max_strain, n_rods, rod_args, 
      pairs, state, ref, skin, rr, extra, xp) = contact
     h = 0.5 * dt
     for step in range(n_steps):
+        # Mid-step positions: after the first step the rods are left there (see advance_rod).
+        drift = h if step == 0 else 0.0
         for i in nodes:
             for d in range(3):
-                xp[i, d] = pos[i, d] + h * vel[i, d]
+                xp[i, d] = pos[i, d] + drift * vel[i, d]
         pairs = _refresh_pairs(xp, xp, ref, skin, False, state, pairs, segs, seg_a, seg_b,
                                seg_rod, seg_k, seg_ne, seg_closed, excluded, seg_radius, nodes)
         for i in nodes:
@@ -56,7 +58,8 @@ def advance_world_verlet(n_steps, t, dt, gravity, max_strain, n_rods, rod_args, 
         state[3] = pair_forces(pairs, state[0], seg_a, seg_b, seg_radius, xp, vel, mass,
                                node_kmin, dt, rr[0], rr[1], rr[2], extra)
         for r in range(n_rods):
-            times[r] = advance_rod(r, 1, t, dt, gravity, max_strain, *rod_args, extra, True)
+            times[r] = advance_rod(r, 1, t, dt, gravity, max_strain, *rod_args, extra, True,
+                                   step > 0, step < n_steps - 1)
             if status[r, 0] != OK:
                 status[r, 2] = step
                 return pairs

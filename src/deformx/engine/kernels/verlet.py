@@ -97,6 +97,7 @@ def advance_rod(
     scr_C, scr_X, scr_edot,
     pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
     planes, status, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, extra, use_extra,
+    start_mid, end_mid,
 ):
     """Advance rod ``r`` by ``n_steps`` steps from time ``t``; returns the new time.
 
@@ -104,6 +105,10 @@ def advance_rod(
     ``col_anchor*``, reactions into ``wrench[r]``) and, with ``use_extra``, the node forces
     ``extra`` (rod-rod contact, computed by the caller at this step's mid-point).
     On divergence stops with ``status[r]`` = (code, element, steps done).
+
+    A caller stepping one step at a time (rod-rod contact) may leave the rod at the next
+    step's mid-point (``end_mid``: positions and frames at ``t + h``) and start from there
+    (``start_mid``): the two half drifts between steps become one, as within a call.
     """
     h = 0.5 * dt
     n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
@@ -119,7 +124,8 @@ def advance_rod(
         n_cols = cols[0].shape[0]
     touching = n_planes > 0 or n_cols > 0 or use_extra
 
-    _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h)
+    if not start_mid:
+        _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h)
     for step in range(n_steps):
         t += h
         _constrain_values(t, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data)
@@ -175,12 +181,13 @@ def advance_rod(
                 for j in range(3):
                     omega[e, j] *= decay
 
-        if step < n_steps - 1:
+        if step < n_steps - 1 or end_mid:
             _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, dt)
         else:
             _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h)
         t += h
-    _constrain_values(t, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data)
+    _constrain_values(t + h if end_mid else t, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data,
+                      fcon_elem, fcon_Q0, fcon_data)
     status[r, 2] = n_steps
     return t
 
@@ -218,4 +225,4 @@ def advance_rods(r_begin, r_end, n_steps, t, dt, gravity, max_strain, times, rod
     """
     for r in range(r_begin, r_end):
         times[r] = advance_rod(r, n_steps, t, dt, gravity, max_strain, *rod_args, extra,
-                               use_extra)
+                               use_extra, False, False)
