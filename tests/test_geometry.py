@@ -28,6 +28,7 @@ from deformx.engine.geometry.closest import (
     closest_segment_triangle,
     lerp,
 )
+from deformx.engine.geometry.faces import face_frames
 
 N_CASES = 500
 TOL = 1e-9  # m, round-off allowance on unit-sized inputs
@@ -439,3 +440,25 @@ def test_pseudonormals_open_mesh_and_convention():
     # Vertex 0: angle pi/2 in both faces, so the plain mean of the two normals.
     np.testing.assert_allclose(vertex_n[0], shared, atol=1e-15)
     np.testing.assert_allclose(np.linalg.norm(vertex_n, axis=1), 1.0)
+
+
+def test_face_frames_give_heights_and_projection_barycentrics():
+    """Per-face affine maps against direct geometry and trimesh's barycentric coordinates;
+    degenerate faces never contain a point."""
+    rng = np.random.default_rng(5)
+    tri = rng.normal(size=(50, 3, 3))
+    V = tri.reshape(-1, 3)
+    F = np.arange(150).reshape(50, 3)
+    G = face_frames(V, F)
+    x = rng.normal(size=(50, 3))
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    height = np.einsum("ij,ij->i", G[:, 0, :3], x) - G[:, 0, 3]
+    np.testing.assert_allclose(height, np.einsum("ij,ij->i", x - tri[:, 0], n), atol=1e-12)
+    v = np.einsum("ij,ij->i", G[:, 1, :3], x) - G[:, 1, 3]
+    w = np.einsum("ij,ij->i", G[:, 2, :3], x) - G[:, 2, 3]
+    expected = trimesh.triangles.points_to_barycentric(tri, x - height[:, None] * n)
+    np.testing.assert_allclose(np.column_stack([1.0 - v - w, v, w]), expected, atol=1e-9)
+
+    flat = face_frames(np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]]), np.array([[0, 1, 2]]))
+    assert np.all(np.isnan(flat))

@@ -68,6 +68,15 @@ def _rotate(pose, c, x0, x1, x2):
 
 
 @njit(cache=True, error_model="numpy")
+def _bary(Fg, f, x):
+    """Barycentrics (u, v, w) of x's projection onto face f's plane (see
+    :mod:`deformx.engine.geometry.faces`)."""
+    v = Fg[f, 1, 0] * x[0] + Fg[f, 1, 1] * x[1] + Fg[f, 1, 2] * x[2] - Fg[f, 1, 3]
+    w = Fg[f, 2, 0] * x[0] + Fg[f, 2, 1] * x[1] + Fg[f, 2, 2] * x[2] - Fg[f, 2, 3]
+    return 1.0 - v - w, v, w
+
+
+@njit(cache=True, error_model="numpy")
 def _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far, within, tol):
     """The first cached face if every face within ``within`` (m) of the slot's segment lies in
     its plane (to ``tol`` m, same orientation) and the cache holds all of them; else -1."""
@@ -102,9 +111,7 @@ def _patch_face(slot, end, x, within, Fg, qc_tris, qc_dist, qc_meta):
                 continue
             break
         f = qc_tris[slot, k]
-        v = Fg[f, 1, 0] * x[0] + Fg[f, 1, 1] * x[1] + Fg[f, 1, 2] * x[2] - Fg[f, 1, 3]
-        w = Fg[f, 2, 0] * x[0] + Fg[f, 2, 1] * x[1] + Fg[f, 2, 2] * x[2] - Fg[f, 2, 3]
-        u = 1.0 - v - w
+        u, v, w = _bary(Fg, f, x)
         if u >= 0.0 and v >= 0.0 and w >= 0.0:
             qc_meta[slot, Q_HINT + end] = k
             return f, u, v, w
@@ -113,10 +120,9 @@ def _patch_face(slot, end, x, within, Fg, qc_tris, qc_dist, qc_meta):
 
 @njit(cache=True, error_model="numpy")
 def _inside(Fg, f, x) -> bool:
-    """Whether x projects into face f (see :mod:`deformx.engine.geometry.faces`)."""
-    v = Fg[f, 1, 0] * x[0] + Fg[f, 1, 1] * x[1] + Fg[f, 1, 2] * x[2] - Fg[f, 1, 3]
-    w = Fg[f, 2, 0] * x[0] + Fg[f, 2, 1] * x[1] + Fg[f, 2, 2] * x[2] - Fg[f, 2, 3]
-    return v >= 0.0 and w >= 0.0 and v + w <= 1.0
+    """Whether x projects into face f."""
+    u, v, w = _bary(Fg, f, x)
+    return u >= 0.0 and v >= 0.0 and w >= 0.0
 
 
 @njit(cache=True, error_model="numpy")
