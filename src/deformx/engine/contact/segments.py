@@ -125,7 +125,7 @@ def _inside(Fg, f, x) -> bool:
     return u >= 0.0 and v >= 0.0 and w >= 0.0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _flat_ref(c, slot, la, lb, skin, qc_meta, qc_geo) -> int:
     """The flat patch's face of a slot whose cache is valid for local ends la, lb and whose
     ends were last found over faces of the patch, else -1 (see ``_mesh_nearest``)."""
@@ -136,51 +136,6 @@ def _flat_ref(c, slot, la, lb, skin, qc_meta, qc_geo) -> int:
                 abs(la[2] - qc_geo[slot, 2]), abs(lb[0] - qc_geo[slot, 3]),
                 abs(lb[1] - qc_geo[slot, 4]), abs(lb[2] - qc_geo[slot, 5]))
     return ref if moved * math.sqrt(3.0) <= skin else -1
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _flat_node(c, slot, p, reach, pose, par, Fg, qc_meta, qc_geo, qc_tris):
-    """The flat-patch shortcut of ``_closest`` for a node still over the face that held it:
-    (decided, hit, signed distance, normal (world), surface point (world)).
-
-    Called straight from the contact loop rather than through ``_closest``: a function inlined
-    by numba increfs and decrefs every array it takes, which costs more than this whole test.
-    """
-    la = _to_local(pose, c, p[0], p[1], p[2])
-    ref = _flat_ref(c, slot, la, la, 0.5 * reach, qc_meta, qc_geo)
-    if ref < 0 or not _inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT]], la):
-        return False, False, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
-    g0, g1, g2 = Fg[ref, 0, 0], Fg[ref, 0, 1], Fg[ref, 0, 2]
-    h = g0 * la[0] + g1 * la[1] + g2 * la[2] - Fg[ref, 0, 3]
-    if abs(h) > reach:
-        return True, False, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
-    if abs(h) <= _TINY:
-        return False, False, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
-    # Closed meshes: signed (the face normal points out); open ones: towards the node.
-    sign = 1.0 if (par[c, P_TWO_SIDED] == 0.0 or h > 0.0) else -1.0
-    nw = _rotate(pose, c, sign * g0, sign * g1, sign * g2)
-    return True, True, sign * h, nw, (p[0] - sign * h * nw[0], p[1] - sign * h * nw[1],
-                                      p[2] - sign * h * nw[2])
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _flat_clear(c, slot, pa, pb, reach, pose, par, Fg, qc_meta, qc_geo, qc_tris) -> bool:
-    """Whether segment pa-pb provably has no contact beyond what its ends carry, because it
-    lies on the outer side (either side of an open mesh) of a flat patch, with both ends
-    over faces of the patch or both farther than ``reach`` (m): its distance to the patch is
-    then at least the linear interpolation of its ends' (see ``_mesh_nearest``)."""
-    la = _to_local(pose, c, pa[0], pa[1], pa[2])
-    lb = _to_local(pose, c, pb[0], pb[1], pb[2])
-    ref = _flat_ref(c, slot, la, lb, 0.5 * reach, qc_meta, qc_geo)
-    if ref < 0 or qc_meta[slot, Q_HINT + 1] < 0:
-        return False
-    ha = Fg[ref, 0, 0] * la[0] + Fg[ref, 0, 1] * la[1] + Fg[ref, 0, 2] * la[2] - Fg[ref, 0, 3]
-    hb = Fg[ref, 0, 0] * lb[0] + Fg[ref, 0, 1] * lb[1] + Fg[ref, 0, 2] * lb[2] - Fg[ref, 0, 3]
-    if not ((ha > 0.0 and hb > 0.0) or (par[c, P_TWO_SIDED] != 0.0 and ha < 0.0 and hb < 0.0)):
-        return False
-    return min(abs(ha), abs(hb)) > reach or (
-        _inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT]], la)
-        and _inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT + 1]], lb))
 
 
 @njit(cache=True, error_model="numpy")
@@ -518,9 +473,27 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         for c in range(n_col):
             pen[i, c] = -1e30
             done = False
-            if kind[c] == MESH and qc_meta[i, Q_FLAT] >= 0:  # (checked here: the call has a cost)
-                done, hit, sd, n, q = _flat_node(c, i, p, radius, pose, par, Fg, qc_meta,
-                                                 qc_geo, qc_tris)
+            if kind[c] == MESH and qc_meta[i, Q_FLAT] >= 0:
+                # The flat-patch shortcut (see _mesh_nearest), written out here: a function
+                # inlined by numba increfs and decrefs every array it takes, which would cost
+                # more than the whole test.
+                la = _to_local(pose, c, p[0], p[1], p[2])
+                ref = _flat_ref(c, i, la, la, 0.5 * radius, qc_meta, qc_geo)
+                if ref >= 0 and _inside(Fg, qc_tris[i, qc_meta[i, Q_HINT]], la):
+                    g0, g1, g2 = Fg[ref, 0, 0], Fg[ref, 0, 1], Fg[ref, 0, 2]
+                    height = g0 * la[0] + g1 * la[1] + g2 * la[2] - Fg[ref, 0, 3]
+                    if abs(height) > radius:
+                        done = True
+                        hit = False
+                    elif abs(height) > _TINY:
+                        # Closed meshes: signed (the face normal points out); open ones:
+                        # towards the node.
+                        sign = 1.0 if (par[c, P_TWO_SIDED] == 0.0 or height > 0.0) else -1.0
+                        n = _rotate(pose, c, sign * g0, sign * g1, sign * g2)
+                        sd = sign * height
+                        q = (p[0] - sd * n[0], p[1] - sd * n[1], p[2] - sd * n[2])
+                        done = True
+                        hit = True
             if not done:
                 hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi,
                                             Bleft, Bright, Bstart, Bcount, Border, Fn, En, Vn, Fg,
@@ -556,14 +529,29 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         radius = 0.5 * (node_radius[a] + node_radius[b])
         pa = (pos[a, 0], pos[a, 1], pos[a, 2])
         pb = (pos[b, 0], pos[b, 1], pos[b, 2])
+        slot = n_nodes + e  # element queries and anchors follow the nodes
         anchored = False
         for c in range(n_col):
-            if kind[c] == MESH and qc_meta[n_nodes + e, Q_FLAT] >= 0 and _flat_clear(
-                    c, n_nodes + e, pa, pb, radius, pose, par, Fg, qc_meta, qc_geo, qc_tris):
-                continue
+            if kind[c] == MESH and qc_meta[slot, Q_FLAT] >= 0:
+                # Flat patch: nothing beyond what the ends carry when the segment lies on its
+                # outer side (either side of an open mesh) with both ends over it or beyond
+                # reach (see _mesh_nearest; written out for the reason given above).
+                la = _to_local(pose, c, pa[0], pa[1], pa[2])
+                lb = _to_local(pose, c, pb[0], pb[1], pb[2])
+                ref = _flat_ref(c, slot, la, lb, 0.5 * radius, qc_meta, qc_geo)
+                if ref >= 0 and qc_meta[slot, Q_HINT + 1] >= 0:
+                    g = (Fg[ref, 0, 0], Fg[ref, 0, 1], Fg[ref, 0, 2], Fg[ref, 0, 3])
+                    ha = g[0] * la[0] + g[1] * la[1] + g[2] * la[2] - g[3]
+                    hb = g[0] * lb[0] + g[1] * lb[1] + g[2] * lb[2] - g[3]
+                    if ((ha > 0.0 and hb > 0.0)
+                            or (par[c, P_TWO_SIDED] != 0.0 and ha < 0.0 and hb < 0.0)) and (
+                            min(abs(ha), abs(hb)) > radius
+                            or (_inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT]], la)
+                                and _inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT + 1]], lb))):
+                        continue
             hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft,
                                         Bright, Bstart, Bcount, Border, Fn, En, Vn, Fg, qcache,
-                                        n_nodes + e, pa, pb, radius)
+                                        slot, pa, pb, radius)
             if not hit or s <= 0.0 or s >= 1.0:
                 continue
             wa = 1.0 - s
@@ -574,7 +562,6 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
             p = (wa * pa[0] + wb * pb[0], wa * pa[1] + wb * pb[1], wa * pa[2] + wb * pb[2])
             u = (wa * vel[a, 0] + wb * vel[b, 0], wa * vel[a, 1] + wb * vel[b, 1],
                  wa * vel[a, 2] + wb * vel[b, 2])
-            slot = n_nodes + e  # element anchors follow the node anchors
             use_anchor = not anchored and (anchor_col[slot] == c or anchor_col[slot] < 0)
             # Friction holds the material point of the segment where the contact began (on a
             # curved surface the deepest point stays put while the rope slides through it).
@@ -612,7 +599,7 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
                     _add_K(el_K, e, 1, ta * sa, 0.0, kt, n)
                     _add_K(el_K, e, 2, sa * sa, 0.0, kt, n)
         if commit and not anchored:
-            anchor_col[n_nodes + e] = -1
+            anchor_col[slot] = -1
     return count
 
 
