@@ -68,6 +68,19 @@ def _rotate(pose, c, x0, x1, x2):
 
 
 @njit(cache=True, error_model="numpy")
+def _height(Fg, f, x) -> float:
+    """Height (m) of x above face f's plane (see :mod:`deformx.engine.geometry.faces`)."""
+    return Fg[f, 0, 0] * x[0] + Fg[f, 0, 1] * x[1] + Fg[f, 0, 2] * x[2] - Fg[f, 0, 3]
+
+
+@njit(cache=True, error_model="numpy")
+def _outer_side(ha: float, hb: float, two_sided: bool) -> bool:
+    """Whether heights ha, hb (m) put both ends of a segment strictly on the outer side of a
+    plane (either side for an open mesh), so that it does not cross it."""
+    return (ha > 0.0 and hb > 0.0) or (two_sided and ha < 0.0 and hb < 0.0)
+
+
+@njit(cache=True, error_model="numpy")
 def _bary(Fg, f, x):
     """Barycentrics (u, v, w) of x's projection onto face f's plane (see
     :mod:`deformx.engine.geometry.faces`)."""
@@ -180,8 +193,8 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
             qc_meta[slot, Q_COL] = c
             qc_meta[slot, Q_N] = n
             qc_geo[slot, Q_FAR] = far
-            qc_meta[slot, Q_FLAT] = _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far, within,
-                                        _FLAT_TOL * reach)
+            qc_meta[slot, Q_FLAT] = _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far,
+                                                within, _FLAT_TOL * reach)
             qc_meta[slot, Q_HINT] = -1
             qc_meta[slot, Q_HINT + 1] = -1
             for d in range(3):
@@ -189,7 +202,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
                 qc_geo[slot, 3 + d] = lb[d]
         ref = qc_meta[slot, Q_FLAT]
         if ref >= 0:
-            ha = Fg[ref, 0, 0] * la[0] + Fg[ref, 0, 1] * la[1] + Fg[ref, 0, 2] * la[2] - Fg[ref, 0, 3]
+            ha = _height(Fg, ref, la)
             if point:
                 f, u, v, w = _patch_face(slot, 0, la, within, Fg, qc_tris, qc_dist, qc_meta)
                 if f >= 0:
@@ -197,10 +210,8 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
                         return -1, 0.0, 0.0, 0.0, 0.0, np.inf, fresh
                     return f, 0.0, u, v, w, ha * ha, fresh
             else:
-                hb = (Fg[ref, 0, 0] * lb[0] + Fg[ref, 0, 1] * lb[1] + Fg[ref, 0, 2] * lb[2]
-                      - Fg[ref, 0, 3])
-                # On the outer side (either side of an open mesh) of the plane, not crossing it.
-                if (ha > 0.0 and hb > 0.0) or (two_sided and ha < 0.0 and hb < 0.0):
+                hb = _height(Fg, ref, lb)
+                if _outer_side(ha, hb, two_sided):
                     if min(abs(ha), abs(hb)) > reach or (
                             _patch_face(slot, 0, la, within, Fg, qc_tris, qc_dist,
                                         qc_meta)[0] >= 0
@@ -252,8 +263,7 @@ def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bsta
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
     if kind == MESH:
         # The packed tables use global indices (see ``pack``): no per-query views, whose
-        # reference counting would cost more than the cached query itself (for the same reason
-        # this function and _mesh_nearest are inlined: a call passing ~20 arrays costs more).
+        # reference counting would cost more than the cached query itself.
         root = mesh_rng[c, 4]
         verts = MV
         faces = MF
@@ -480,8 +490,7 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
                 la = _to_local(pose, c, p[0], p[1], p[2])
                 ref = _flat_ref(c, i, la, la, 0.5 * radius, qc_meta, qc_geo)
                 if ref >= 0 and _inside(Fg, qc_tris[i, qc_meta[i, Q_HINT]], la):
-                    g0, g1, g2 = Fg[ref, 0, 0], Fg[ref, 0, 1], Fg[ref, 0, 2]
-                    height = g0 * la[0] + g1 * la[1] + g2 * la[2] - Fg[ref, 0, 3]
+                    height = _height(Fg, ref, la)
                     if abs(height) > radius:
                         done = True
                         hit = False
@@ -489,7 +498,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
                         # Closed meshes: signed (the face normal points out); open ones:
                         # towards the node.
                         sign = 1.0 if (par[c, P_TWO_SIDED] == 0.0 or height > 0.0) else -1.0
-                        n = _rotate(pose, c, sign * g0, sign * g1, sign * g2)
+                        n = _rotate(pose, c, sign * Fg[ref, 0, 0], sign * Fg[ref, 0, 1],
+                                    sign * Fg[ref, 0, 2])
                         sd = sign * height
                         q = (p[0] - sd * n[0], p[1] - sd * n[1], p[2] - sd * n[2])
                         done = True
@@ -540,11 +550,9 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
                 lb = _to_local(pose, c, pb[0], pb[1], pb[2])
                 ref = _flat_ref(c, slot, la, lb, 0.5 * radius, qc_meta, qc_geo)
                 if ref >= 0 and qc_meta[slot, Q_HINT + 1] >= 0:
-                    g = (Fg[ref, 0, 0], Fg[ref, 0, 1], Fg[ref, 0, 2], Fg[ref, 0, 3])
-                    ha = g[0] * la[0] + g[1] * la[1] + g[2] * la[2] - g[3]
-                    hb = g[0] * lb[0] + g[1] * lb[1] + g[2] * lb[2] - g[3]
-                    if ((ha > 0.0 and hb > 0.0)
-                            or (par[c, P_TWO_SIDED] != 0.0 and ha < 0.0 and hb < 0.0)) and (
+                    ha = _height(Fg, ref, la)
+                    hb = _height(Fg, ref, lb)
+                    if _outer_side(ha, hb, par[c, P_TWO_SIDED] != 0.0) and (
                             min(abs(ha), abs(hb)) > radius
                             or (_inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT]], la)
                                 and _inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT + 1]], lb))):

@@ -286,6 +286,22 @@ def _nearer_first(lo, hi, a, b, slo, shi, mid):
 
 
 @njit(cache=True, error_model="numpy")
+def _push_children(lo, hi, a, b, slo, shi, mid, limit2, stack, bound, sp) -> int:
+    """Push children a, b whose box gap^2 to the segment's box is within ``limit2`` (m^2),
+    the nearer one last so that it is searched first; returns the new stack size."""
+    a, b, ga, gb = _nearer_first(lo, hi, a, b, slo, shi, mid)
+    if gb <= limit2:
+        stack[sp] = b
+        bound[sp] = gb
+        sp += 1
+    if ga <= limit2:
+        stack[sp] = a
+        bound[sp] = ga
+        sp += 1
+    return sp
+
+
+@njit(cache=True, error_model="numpy")
 def _corners(vertices, faces, f):
     """The three corners (m) of triangle ``f`` as tuples."""
     return ((vertices[faces[f, 0], 0], vertices[faces[f, 0], 1], vertices[faces[f, 0], 2]),
@@ -359,16 +375,7 @@ def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, face
             if best <= 0.0 and tri >= 0:
                 break  # touching: nothing can be nearer
             continue
-        # Nearer child pushed last, so that it is searched first.
-        a, b, ga, gb = _nearer_first(lo, hi, a, right[node], slo, shi, mid)
-        if gb <= best:
-            stack[sp] = b
-            bound[sp] = gb
-            sp += 1
-        if ga <= best:
-            stack[sp] = a
-            bound[sp] = ga
-            sp += 1
+        sp = _push_children(lo, hi, a, right[node], slo, shi, mid, best, stack, bound, sp)
     if tri < 0:
         return -1, 0.0, 0.0, 0.0, 0.0, np.inf
     return tri, rs, ru, rv, rw, best
@@ -467,15 +474,6 @@ def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0,
                 out_dist[j] = d
                 n += 1
             continue
-        # Nearer child pushed last, so that it is searched first.
-        a, b, ga, gb = _nearer_first(lo, hi, a, right[node], slo, shi, mid)
-        h2 = horizon * horizon
-        if gb <= h2:
-            stack[sp] = b
-            bound[sp] = gb
-            sp += 1
-        if ga <= h2:
-            stack[sp] = a
-            bound[sp] = ga
-            sp += 1
+        sp = _push_children(lo, hi, a, right[node], slo, shi, mid, horizon * horizon, stack,
+                            bound, sp)
     return n, horizon
