@@ -138,17 +138,12 @@ def _inside(Fg, f, x) -> bool:
     return u >= 0.0 and v >= 0.0 and w >= 0.0
 
 
-@njit(cache=True, inline="always", error_model="numpy")
-def _flat_ref(c, slot, la, lb, skin, qc_meta, qc_geo) -> int:
-    """The flat patch's face of a slot whose cache is valid for local ends la, lb and whose
-    ends were last found over faces of the patch, else -1 (see ``_mesh_nearest``)."""
-    ref = qc_meta[slot, Q_FLAT]
-    if qc_meta[slot, Q_COL] != c or ref < 0 or qc_meta[slot, Q_HINT] < 0:
-        return -1
-    moved = max(abs(la[0] - qc_geo[slot, 0]), abs(la[1] - qc_geo[slot, 1]),
-                abs(la[2] - qc_geo[slot, 2]), abs(lb[0] - qc_geo[slot, 3]),
-                abs(lb[1] - qc_geo[slot, 4]), abs(lb[2] - qc_geo[slot, 5]))
-    return ref if moved * math.sqrt(3.0) <= skin else -1
+@njit(cache=True, error_model="numpy")
+def _moved(qc_geo, slot, la, lb) -> float:
+    """Largest coordinate change (m) of local ends la, lb since the slot's cache was filled."""
+    return max(abs(la[0] - qc_geo[slot, 0]), abs(la[1] - qc_geo[slot, 1]),
+               abs(la[2] - qc_geo[slot, 2]), abs(lb[0] - qc_geo[slot, 3]),
+               abs(lb[1] - qc_geo[slot, 4]), abs(lb[2] - qc_geo[slot, 5]))
 
 
 @njit(cache=True, error_model="numpy")
@@ -250,82 +245,81 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _closest(c, kind, pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-             Border, Fn, En, Vn, Fg, qcache, slot, pa, pb, reach):
-    """Deepest point of world segment pa-pb against collider ``c`` within ``reach`` (m).
+def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount, Border, Fn,
+                  En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, slot, pa, pb, reach):
+    """Deepest point of world segment pa-pb against mesh collider ``c`` (BVH root ``root`` in
+    the packed tables) within ``reach`` (m).
 
     Returns (hit, s, signed distance of the segment axis, normal (world), surface point
-    (world)); hit is False when the segment is farther than ``reach``, or (meshes) when it
-    provably touches nothing beyond what its ends touch (see ``_mesh_nearest``). ``slot``
-    names the query (node i or element N + e) in the mesh query cache ``qcache``.
+    (world)); hit is False when the segment is farther than ``reach``, or when it provably
+    touches nothing beyond what its ends touch (see ``_mesh_nearest``). ``slot`` names the
+    query (node i or element N + e) in the query cache. The packed tables use global indices
+    (see ``pack``): no per-query views, whose reference counting would cost more than the
+    cached query itself.
     """
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
-    if kind == MESH:
-        # The packed tables use global indices (see ``pack``): no per-query views, whose
-        # reference counting would cost more than the cached query itself.
-        root = mesh_rng[c, 4]
-        verts = MV
-        faces = MF
-        qc_meta, qc_geo, qc_tris, qc_dist = qcache
-        tri, s, u, v, w, d2, fresh = _mesh_nearest(c, slot, root, Blo, Bhi, Bleft, Bright,
-                                                   Bstart, Bcount, Border, verts, faces, Fg, la,
-                                                   lb, reach, 0.5 * reach,
-                                                   par[c, P_TWO_SIDED] != 0.0, qc_meta,
-                                                   qc_geo, qc_tris, qc_dist)
-        if tri < 0 and fresh and par[c, P_TWO_SIDED] == 0.0 and par[c, P_REPULSION] > 0.0:
-            # Nothing near the surface: the segment may still be inside a closed mesh, less
-            # than the repulsion distance deep (checked when the cache is refilled, or on
-            # every call while it is inside).
-            tri, s, u, v, w, d2 = bvh_closest_segment(Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-                                                      Border, verts, faces, la, lb,
-                                                      reach + par[c, P_REPULSION], root)
-            if tri >= 0:
-                p = lerp(la, lb, s)
-                q = bary_point((verts[faces[tri, 0], 0], verts[faces[tri, 0], 1],
-                                verts[faces[tri, 0], 2]),
-                               (verts[faces[tri, 1], 0], verts[faces[tri, 1], 1],
-                                verts[faces[tri, 1], 2]),
-                               (verts[faces[tri, 2], 0], verts[faces[tri, 2], 1],
-                                verts[faces[tri, 2], 2]), u, v, w)
-                if signed_side(Fn, En, Vn, faces, tri, u, v, w, p, q) > 0.0:
-                    tri = -1  # outside and clear of the surface
-                else:
-                    qc_meta[slot, Q_COL] = -1  # deep inside: search afresh until it is out
-        if tri < 0:
+    tri, s, u, v, w, d2, fresh = _mesh_nearest(c, slot, root, Blo, Bhi, Bleft, Bright, Bstart,
+                                               Bcount, Border, MV, MF, Fg, la, lb, reach,
+                                               0.5 * reach, par[c, P_TWO_SIDED] != 0.0,
+                                               qc_meta, qc_geo, qc_tris, qc_dist)
+    if tri < 0 and fresh and par[c, P_TWO_SIDED] == 0.0 and par[c, P_REPULSION] > 0.0:
+        # Nothing near the surface: the segment may still be inside a closed mesh, less
+        # than the repulsion distance deep (checked when the cache is refilled, or on
+        # every call while it is inside).
+        tri, s, u, v, w, d2 = bvh_closest_segment(Blo, Bhi, Bleft, Bright, Bstart, Bcount,
+                                                  Border, MV, MF, la, lb,
+                                                  reach + par[c, P_REPULSION], root)
+        if tri >= 0:
+            p = lerp(la, lb, s)
+            q = bary_point((MV[MF[tri, 0], 0], MV[MF[tri, 0], 1], MV[MF[tri, 0], 2]),
+                           (MV[MF[tri, 1], 0], MV[MF[tri, 1], 1], MV[MF[tri, 1], 2]),
+                           (MV[MF[tri, 2], 0], MV[MF[tri, 2], 1], MV[MF[tri, 2], 2]), u, v, w)
+            if signed_side(Fn, En, Vn, MF, tri, u, v, w, p, q) > 0.0:
+                tri = -1  # outside and clear of the surface
+            else:
+                qc_meta[slot, Q_COL] = -1  # deep inside: search afresh until it is out
+    if tri < 0:
+        return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+    ia, ib, ic = MF[tri, 0], MF[tri, 1], MF[tri, 2]
+    q = (u * MV[ia, 0] + v * MV[ib, 0] + w * MV[ic, 0],
+         u * MV[ia, 1] + v * MV[ib, 1] + w * MV[ic, 1],
+         u * MV[ia, 2] + v * MV[ib, 2] + w * MV[ic, 2])
+    p = (la[0] + s * (lb[0] - la[0]), la[1] + s * (lb[1] - la[1]), la[2] + s * (lb[2] - la[2]))
+    dist = math.sqrt(d2)
+    if dist > _TINY:
+        n = ((p[0] - q[0]) / dist, (p[1] - q[1]) / dist, (p[2] - q[2]) / dist)
+        sd = dist
+        if par[c, P_TWO_SIDED] == 0.0:
+            if signed_side(Fn, En, Vn, MF, tri, u, v, w, p, q) < 0.0:
+                # Inside a closed mesh: push out the nearest way.
+                n = (-n[0], -n[1], -n[2])
+                sd = -dist
+        elif dist > reach:
             return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
-        ia, ib, ic = faces[tri, 0], faces[tri, 1], faces[tri, 2]
-        q = (u * verts[ia, 0] + v * verts[ib, 0] + w * verts[ic, 0],
-             u * verts[ia, 1] + v * verts[ib, 1] + w * verts[ic, 1],
-             u * verts[ia, 2] + v * verts[ib, 2] + w * verts[ic, 2])
-        p = (la[0] + s * (lb[0] - la[0]), la[1] + s * (lb[1] - la[1]), la[2] + s * (lb[2] - la[2]))
-        dist = math.sqrt(d2)
-        fn = Fn[tri]
-        if dist > _TINY:
-            n = ((p[0] - q[0]) / dist, (p[1] - q[1]) / dist, (p[2] - q[2]) / dist)
-            sd = dist
-            if par[c, P_TWO_SIDED] == 0.0:
-                if signed_side(Fn, En, Vn, faces, tri, u, v, w, p, q) < 0.0:
-                    # Inside a closed mesh: push out the nearest way.
-                    n = (-n[0], -n[1], -n[2])
-                    sd = -dist
-            elif dist > reach:
-                return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
-        else:  # the axis crosses a face: push along its normal (outward for a closed mesh)
-            n = (fn[0], fn[1], fn[2])
-            sd = 0.0
-            if par[c, P_TWO_SIDED] != 0.0:
-                # Two-sided: back to the side the segment's far end is on.
-                far = lb if s < 0.5 else la
-                side = (far[0] - q[0]) * n[0] + (far[1] - q[1]) * n[1] + (far[2] - q[2]) * n[2]
-                if side > 0.0:
-                    n = (-n[0], -n[1], -n[2])
-        if sd > reach:
-            return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
-        nw = _rotate(pose, c, n[0], n[1], n[2])
-        qw = _rotate(pose, c, q[0], q[1], q[2])
-        return True, s, sd, nw, (qw[0] + pose[c, 0, 3], qw[1] + pose[c, 1, 3], qw[2] + pose[c, 2, 3])
-    shape = par[c, P_SHAPE:P_SHAPE + 3]
+    else:  # the axis crosses a face: push along its normal (outward for a closed mesh)
+        n = (Fn[tri, 0], Fn[tri, 1], Fn[tri, 2])
+        sd = 0.0
+        if par[c, P_TWO_SIDED] != 0.0:
+            # Two-sided: back to the side the segment's far end is on.
+            far = lb if s < 0.5 else la
+            side = (far[0] - q[0]) * n[0] + (far[1] - q[1]) * n[1] + (far[2] - q[2]) * n[2]
+            if side > 0.0:
+                n = (-n[0], -n[1], -n[2])
+    if sd > reach:
+        return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+    nw = _rotate(pose, c, n[0], n[1], n[2])
+    qw = _rotate(pose, c, q[0], q[1], q[2])
+    return True, s, sd, nw, (qw[0] + pose[c, 0, 3], qw[1] + pose[c, 1, 3], qw[2] + pose[c, 2, 3])
+
+
+@njit(cache=True, error_model="numpy")
+def _shape_closest(c, kind, pose, par, pa, pb, reach):
+    """Deepest point of world segment pa-pb against analytic shape collider ``c`` within
+    ``reach`` (m); returns as ``_mesh_closest``."""
+    la = _to_local(pose, c, pa[0], pa[1], pa[2])
+    lb = _to_local(pose, c, pb[0], pb[1], pb[2])
+    shape = (par[c, P_SHAPE], par[c, P_SHAPE + 1], par[c, P_SHAPE + 2])
     s = segment_deepest(kind, shape, la[0], la[1], la[2], lb[0], lb[1], lb[2])
     p0 = la[0] + s * (lb[0] - la[0])
     p1 = la[1] + s * (lb[1] - la[1])
@@ -352,75 +346,81 @@ def collider_penalty(par, c, mass, k_floor, dt_ref):
     return k, damp
 
 
-@njit(cache=True, inline="always", error_model="numpy")
-def _one_contact(r, c, pose, twist, par, p, u, n, q, depth, m_c, k_floor, dt_ref, h, x_ref0,
-                 anchor, anchor_col, slot, use_anchor, commit, wrench):
-    """Force (N, world) of one contact of penetration ``depth`` at point ``p`` moving with
-    ``u`` against collider ``c`` (normal ``n``, surface point ``q``), the normal stiffness
-    ``k + c / h`` and the tangential one (0 when sliding); adds the reaction to ``wrench``.
+@njit(cache=True, error_model="numpy")
+def _to_world(pose, c, x0, x1, x2):
+    y = _rotate(pose, c, x0, x1, x2)
+    return y[0] + pose[c, 0, 3], y[1] + pose[c, 1, 3], y[2] + pose[c, 2, 3]
 
-    With ``use_anchor`` the friction is the anchored spring-slider of anchor ``slot``
-    (``x_ref0``: where a new contact anchors); otherwise rate-regularised kinetic friction.
-    """
-    kc, cc = collider_penalty(par, c, m_c, k_floor, dt_ref)
+
+@njit(cache=True, error_model="numpy")
+def _relative_velocity(pose, twist, c, u, q):
+    """Velocity (m/s) of a rod point moving with ``u`` relative to collider ``c``'s surface
+    point ``q`` (world), and q's offset from the collider's origin (m)."""
     rx = q[0] - pose[c, 0, 3]
     ry = q[1] - pose[c, 1, 3]
     rz = q[2] - pose[c, 2, 3]
-    # Relative velocity of the rod's point and the collider's surface point.
-    u0 = u[0] - (twist[c, 0] + twist[c, 4] * rz - twist[c, 5] * ry)
-    u1 = u[1] - (twist[c, 1] + twist[c, 5] * rx - twist[c, 3] * rz)
-    u2 = u[2] - (twist[c, 2] + twist[c, 3] * ry - twist[c, 4] * rx)
-    un = u0 * n[0] + u1 * n[1] + u2 * n[2]
-    fn = kc * depth - cc * un
+    return ((u[0] - (twist[c, 0] + twist[c, 4] * rz - twist[c, 5] * ry),
+             u[1] - (twist[c, 1] + twist[c, 5] * rx - twist[c, 3] * rz),
+             u[2] - (twist[c, 2] + twist[c, 3] * ry - twist[c, 4] * rx)), (rx, ry, rz))
+
+
+@njit(cache=True, error_model="numpy")
+def _add_reaction(wrench, r, c, rq, f) -> None:
+    """Adds -f acting at offset ``rq`` (m) from collider c's origin to its wrench."""
+    wrench[r, c, 0] -= f[0]
+    wrench[r, c, 1] -= f[1]
+    wrench[r, c, 2] -= f[2]
+    wrench[r, c, 3] -= rq[1] * f[2] - rq[2] * f[1]
+    wrench[r, c, 4] -= rq[2] * f[0] - rq[0] * f[2]
+    wrench[r, c, 5] -= rq[0] * f[1] - rq[1] * f[0]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _penalty_friction(kc, cc, mu_s, mu_k, h, p, w, n, depth, A, use_anchor):
+    """Force (N, world) of one contact of penetration ``depth`` (m) at point ``p`` moving with
+    ``w`` relative to the surface (normal ``n``): penalty ``kc`` (N/m), ``cc`` (N s/m), and the
+    tangential stiffness (N/m, 0 when sliding); scalars only (inlined with no reference
+    counting).
+
+    With ``use_anchor`` the friction is the spring-slider anchored at ``A`` (world); the
+    anchor's next position is returned (it trails a sliding point at ``mu_k N``). Otherwise
+    rate-regularised kinetic friction.
+    """
+    wn = w[0] * n[0] + w[1] * n[1] + w[2] * n[2]
+    fn = kc * depth - cc * wn
     if fn <= 0.0:
-        return False, (0.0, 0.0, 0.0), 0.0, 0.0
+        return False, (0.0, 0.0, 0.0), 0.0, A
     f0 = fn * n[0]
     f1 = fn * n[1]
     f2 = fn * n[2]
-    mu_s = par[c, P_MUS]
-    mu_k = par[c, P_MUK]
     kt = 0.0
     if mu_s > 0.0 or mu_k > 0.0:
-        t0 = u0 - un * n[0]
-        t1 = u1 - un * n[1]
-        t2 = u2 - un * n[2]
+        t0 = w[0] - wn * n[0]
+        t1 = w[1] - wn * n[1]
+        t2 = w[2] - wn * n[2]
         if use_anchor:
-            if anchor_col[slot] == c:
-                A = _rotate(pose, c, anchor[slot, 0], anchor[slot, 1], anchor[slot, 2])
-                A0 = A[0] + pose[c, 0, 3]
-                A1 = A[1] + pose[c, 1, 3]
-                A2 = A[2] + pose[c, 2, 3]
-            else:  # touching down: anchor where the point started the step
-                A0, A1, A2 = x_ref0[0], x_ref0[1], x_ref0[2]
-            d0 = p[0] - A0
-            d1 = p[1] - A1
-            d2 = p[2] - A2
+            d0 = p[0] - A[0]
+            d1 = p[1] - A[1]
+            d2 = p[2] - A[2]
             dn = d0 * n[0] + d1 * n[1] + d2 * n[2]
             # Sticking: the spring plus critical damping of the tangential velocity.
             s0 = kc * (d0 - dn * n[0]) + cc * t0
             s1 = kc * (d1 - dn * n[1]) + cc * t1
             s2 = kc * (d2 - dn * n[2]) + cc * t2
-            smag = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
-            if smag <= mu_s * fn:
+            smag2 = s0 * s0 + s1 * s1 + s2 * s2
+            limit = mu_s * fn
+            if smag2 <= limit * limit:
                 kt = kc + cc / h
                 f0 -= s0
                 f1 -= s1
                 f2 -= s2
             else:  # sliding against the trial force; the anchor trails at mu_k N
-                back = mu_k * fn / smag
+                back = mu_k * fn / math.sqrt(smag2)
                 f0 -= back * s0
                 f1 -= back * s1
                 f2 -= back * s2
                 back /= kc
-                A0 = p[0] - back * s0
-                A1 = p[1] - back * s1
-                A2 = p[2] - back * s2
-            if commit:
-                anchor_col[slot] = c
-                loc = _to_local(pose, c, A0, A1, A2)
-                anchor[slot, 0] = loc[0]
-                anchor[slot, 1] = loc[1]
-                anchor[slot, 2] = loc[2]
+                A = (p[0] - back * s0, p[1] - back * s1, p[2] - back * s2)
         else:
             tmag = math.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
             if tmag > 0.0:
@@ -428,14 +428,7 @@ def _one_contact(r, c, pose, twist, par, p, u, n, q, depth, m_c, k_floor, dt_ref
                 f0 -= ft * t0
                 f1 -= ft * t1
                 f2 -= ft * t2
-    # Reaction on the collider: -f at the surface point, torque about its origin.
-    wrench[r, c, 0] -= f0
-    wrench[r, c, 1] -= f1
-    wrench[r, c, 2] -= f2
-    wrench[r, c, 3] -= ry * f2 - rz * f1
-    wrench[r, c, 4] -= rz * f0 - rx * f2
-    wrench[r, c, 5] -= rx * f1 - ry * f0
-    return True, (f0, f1, f2), kc + cc / h, kt
+    return True, (f0, f1, f2), kt, A
 
 
 @njit(cache=True, error_model="numpy")
@@ -467,7 +460,6 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     """
     (kind, pose, twist, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
      Border, Fn, En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist) = cols
-    qcache = (qc_meta, qc_geo, qc_tris, qc_dist)
     n_col = kind.shape[0]
     n_nodes = pos.shape[0]
     for c in range(n_col):
@@ -488,8 +480,10 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
                 # inlined by numba increfs and decrefs every array it takes, which would cost
                 # more than the whole test.
                 la = _to_local(pose, c, p[0], p[1], p[2])
-                ref = _flat_ref(c, i, la, la, 0.5 * radius, qc_meta, qc_geo)
-                if ref >= 0 and _inside(Fg, qc_tris[i, qc_meta[i, Q_HINT]], la):
+                ref = qc_meta[i, Q_FLAT]
+                if (qc_meta[i, Q_COL] == c and qc_meta[i, Q_HINT] >= 0
+                        and _moved(qc_geo, i, la, la) * math.sqrt(3.0) <= 0.5 * radius
+                        and _inside(Fg, qc_tris[i, qc_meta[i, Q_HINT]], la)):
                     height = _height(Fg, ref, la)
                     if abs(height) > radius:
                         done = True
@@ -504,22 +498,37 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
                         q = (p[0] - sd * n[0], p[1] - sd * n[1], p[2] - sd * n[2])
                         done = True
                         hit = True
-            if not done:
-                hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi,
-                                            Bleft, Bright, Bstart, Bcount, Border, Fn, En, Vn, Fg,
-                                            qcache, i, p, p, radius)
+            if done:
+                pass
+            elif kind[c] == MESH:
+                hit, s, sd, n, q = _mesh_closest(c, mesh_rng[c, 4], pose, par, MV, MF, Blo, Bhi,
+                                                 Bleft, Bright, Bstart, Bcount, Border, Fn, En,
+                                                 Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, i, p,
+                                                 p, radius)
+            else:
+                hit, s, sd, n, q = _shape_closest(c, kind[c], pose, par, p, p, radius)
             if not hit:
                 continue
             pen[i, c] = radius - sd
             if pen[i, c] <= 0.0:
                 continue
             use_anchor = not anchored and (anchor_col[i] == c or anchor_col[i] < 0)
-            on, f, kn, kt = _one_contact(r, c, pose, twist, par, p, u, n, q, pen[i, c], mass[i],
-                                         node_kmin[i], dt_ref, h,
-                                         (x_ref[i, 0], x_ref[i, 1], x_ref[i, 2]), anchor,
-                                         anchor_col, i, use_anchor, commit, wrench)
+            # Written out rather than one helper taking the arrays (see above); a new contact
+            # anchors where the point started the step.
+            A = (x_ref[i, 0], x_ref[i, 1], x_ref[i, 2])
+            if use_anchor and anchor_col[i] == c:
+                A = _to_world(pose, c, anchor[i, 0], anchor[i, 1], anchor[i, 2])
+            kc, cc = collider_penalty(par, c, mass[i], node_kmin[i], dt_ref)
+            w, rq = _relative_velocity(pose, twist, c, u, q)
+            on, f, kt, A = _penalty_friction(kc, cc, par[c, P_MUS], par[c, P_MUK], h, p, w, n,
+                                             pen[i, c], A, use_anchor)
             if not on:
                 continue
+            kn = kc + cc / h
+            _add_reaction(wrench, r, c, rq, f)
+            if commit and use_anchor and (par[c, P_MUS] > 0.0 or par[c, P_MUK] > 0.0):
+                anchor_col[i] = c
+                anchor[i, 0], anchor[i, 1], anchor[i, 2] = _to_local(pose, c, A[0], A[1], A[2])
             anchored = anchored or use_anchor
             count += 1
             for d in range(3):
@@ -548,8 +557,10 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
                 # reach (see _mesh_nearest; written out for the reason given above).
                 la = _to_local(pose, c, pa[0], pa[1], pa[2])
                 lb = _to_local(pose, c, pb[0], pb[1], pb[2])
-                ref = _flat_ref(c, slot, la, lb, 0.5 * radius, qc_meta, qc_geo)
-                if ref >= 0 and qc_meta[slot, Q_HINT + 1] >= 0:
+                ref = qc_meta[slot, Q_FLAT]
+                if (qc_meta[slot, Q_COL] == c and qc_meta[slot, Q_HINT] >= 0
+                        and qc_meta[slot, Q_HINT + 1] >= 0
+                        and _moved(qc_geo, slot, la, lb) * math.sqrt(3.0) <= 0.5 * radius):
                     ha = _height(Fg, ref, la)
                     hb = _height(Fg, ref, lb)
                     if _outer_side(ha, hb, par[c, P_TWO_SIDED] != 0.0) and (
@@ -557,9 +568,13 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
                             or (_inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT]], la)
                                 and _inside(Fg, qc_tris[slot, qc_meta[slot, Q_HINT + 1]], lb))):
                         continue
-            hit, s, sd, n, q = _closest(c, kind[c], pose, par, mesh_rng, MV, MF, Blo, Bhi, Bleft,
-                                        Bright, Bstart, Bcount, Border, Fn, En, Vn, Fg, qcache,
-                                        slot, pa, pb, radius)
+            if kind[c] == MESH:
+                hit, s, sd, n, q = _mesh_closest(c, mesh_rng[c, 4], pose, par, MV, MF, Blo, Bhi,
+                                                 Bleft, Bright, Bstart, Bcount, Border, Fn, En,
+                                                 Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, slot,
+                                                 pa, pb, radius)
+            else:
+                hit, s, sd, n, q = _shape_closest(c, kind[c], pose, par, pa, pb, radius)
             if not hit or s <= 0.0 or s >= 1.0:
                 continue
             wa = 1.0 - s
@@ -578,13 +593,22 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
             pm = (ta * pa[0] + sa * pb[0], ta * pa[1] + sa * pb[1], ta * pa[2] + sa * pb[2])
             x0 = (ta * x_ref[a, 0] + sa * x_ref[b, 0], ta * x_ref[a, 1] + sa * x_ref[b, 1],
                   ta * x_ref[a, 2] + sa * x_ref[b, 2])
-            on, f, kn, kt = _one_contact(r, c, pose, twist, par, pm, u, n, q, excess,
-                                         wa * mass[a] + wb * mass[b],
-                                         wa * node_kmin[a] + wb * node_kmin[b], dt_ref, h, x0,
-                                         anchor, anchor_col, slot, use_anchor, commit, wrench)
+            A = x0
+            if use_anchor and anchor_col[slot] == c:
+                A = _to_world(pose, c, anchor[slot, 0], anchor[slot, 1], anchor[slot, 2])
+            kc, cc = collider_penalty(par, c, wa * mass[a] + wb * mass[b],
+                                      wa * node_kmin[a] + wb * node_kmin[b], dt_ref)
+            w, rq = _relative_velocity(pose, twist, c, u, q)
+            on, f, kt, A = _penalty_friction(kc, cc, par[c, P_MUS], par[c, P_MUK], h, pm, w, n,
+                                             excess, A, use_anchor)
             if not on:
                 continue
-            if commit and use_anchor:
+            kn = kc + cc / h
+            _add_reaction(wrench, r, c, rq, f)
+            if commit and use_anchor and (par[c, P_MUS] > 0.0 or par[c, P_MUK] > 0.0):
+                anchor_col[slot] = c
+                anchor[slot, 0], anchor[slot, 1], anchor[slot, 2] = _to_local(pose, c, A[0],
+                                                                              A[1], A[2])
                 anchor[slot, 3] = sa
             anchored = anchored or use_anchor
             count += 1
