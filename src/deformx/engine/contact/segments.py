@@ -31,8 +31,9 @@ import math
 
 import numpy as np
 from numba import njit
+from numba.core.cpu import CPUTargetOptions
 
-from ..geometry.bvh import bvh_closest_segment, bvh_nearest_k, signed_side
+from ..geometry.bvh import bvh_closest_segment, bvh_nearest_k, signed_side, traversal_stack
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from .primitives import segment_deepest, shape_sdf
 
@@ -48,6 +49,13 @@ _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment cros
 # Coplanarity tolerance of a flat patch, relative to the contact reach (5 nm for a 5 mm rope):
 # the largest penetration a near-flat patch's shortcut can misjudge.
 _FLAT_TOL = 1e-6
+# numba option for the per-query mesh search: no reference counting. numba keeps counting the
+# array arguments of any function that calls something able to raise (the search calls the BVH
+# traversals), i.e. two atomic operations per array and call: a third of a curved-mesh step with
+# ~20 collider tables. Safe there: the search allocates nothing (its traversal stack is passed
+# in; numba refuses to compile an allocation without counting) and only borrows the kernel's
+# arrays for the duration of the call. A private numba option: without it, plain counting.
+_NO_REFCOUNT = {"_nrt": False} if hasattr(CPUTargetOptions, "_nrt") else {}
 
 
 @njit(cache=True, error_model="numpy")
@@ -146,10 +154,11 @@ def _moved(qc_geo, slot, la, lb) -> float:
                abs(lb[1] - qc_geo[slot, 4]), abs(lb[2] - qc_geo[slot, 5]))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, Fg, la,
-                  lb, reach, skin, two_sided, qc_meta, qc_geo, qc_tris, qc_dist):
-    """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache.
+                  lb, reach, skin, two_sided, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound):
+    """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache;
+    ``stack``, ``bound``: BVH traversal scratch (``traversal_stack``).
 
     The cache holds the triangles nearest to where the slot's segment was when it was filled,
     sorted by their exact distance then, and a horizon that no other triangle comes closer
@@ -182,7 +191,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     while True:
         if refill:
             n, far = bvh_nearest_k(lo, hi, left, right, start, count, order, verts, faces, la,
-                                   lb, within, qc_tris[slot], qc_dist[slot], root)
+                                   lb, within, qc_tris[slot], qc_dist[slot], root, stack, bound)
             fresh = True
             delta2 = 0.0
             qc_meta[slot, Q_COL] = c
@@ -236,7 +245,8 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
         if fresh:  # more than the cache's size tie at the nearest distance: search the tree
             qc_meta[slot, Q_COL] = -1
             tri, s, u, v, w, d2 = bvh_closest_segment(lo, hi, left, right, start, count, order,
-                                                      verts, faces, la, lb, reach, root)
+                                                      verts, faces, la, lb, reach, root, stack,
+                                                      bound)
             return tri, s, u, v, w, d2, True
         refill = True
     if tri < 0:
@@ -244,32 +254,35 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     return tri, rs, ru, rv, rw, best, fresh
 
 
-@njit(cache=True, inline="always", error_model="numpy")
+@njit(cache=True, error_model="numpy", **_NO_REFCOUNT)
 def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount, Border, Fn,
-                  En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, slot, pa, pb, reach):
+                  En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound, slot, pa, pb,
+                  reach):
     """Deepest point of world segment pa-pb against mesh collider ``c`` (BVH root ``root`` in
     the packed tables) within ``reach`` (m).
 
     Returns (hit, s, signed distance of the segment axis, normal (world), surface point
     (world)); hit is False when the segment is farther than ``reach``, or when it provably
     touches nothing beyond what its ends touch (see ``_mesh_nearest``). ``slot`` names the
-    query (node i or element N + e) in the query cache. The packed tables use global indices
-    (see ``pack``): no per-query views, whose reference counting would cost more than the
-    cached query itself.
+    query (node i or element N + e) in the query cache; ``stack``, ``bound``: BVH traversal
+    scratch. Compiled without reference counting (see ``_NO_REFCOUNT``); the packed tables use
+    global indices (see ``pack``) so that no per-query views are needed.
     """
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
     tri, s, u, v, w, d2, fresh = _mesh_nearest(c, slot, root, Blo, Bhi, Bleft, Bright, Bstart,
                                                Bcount, Border, MV, MF, Fg, la, lb, reach,
                                                0.5 * reach, par[c, P_TWO_SIDED] != 0.0,
-                                               qc_meta, qc_geo, qc_tris, qc_dist)
+                                               qc_meta, qc_geo, qc_tris, qc_dist, stack,
+                                               bound)
     if tri < 0 and fresh and par[c, P_TWO_SIDED] == 0.0 and par[c, P_REPULSION] > 0.0:
         # Nothing near the surface: the segment may still be inside a closed mesh, less
         # than the repulsion distance deep (checked when the cache is refilled, or on
         # every call while it is inside).
         tri, s, u, v, w, d2 = bvh_closest_segment(Blo, Bhi, Bleft, Bright, Bstart, Bcount,
                                                   Border, MV, MF, la, lb,
-                                                  reach + par[c, P_REPULSION], root)
+                                                  reach + par[c, P_REPULSION], root, stack,
+                                                  bound)
         if tri >= 0:
             p = lerp(la, lb, s)
             q = bary_point((MV[MF[tri, 0], 0], MV[MF[tri, 0], 1], MV[MF[tri, 0], 2]),
@@ -462,6 +475,7 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
      Border, Fn, En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist) = cols
     n_col = kind.shape[0]
     n_nodes = pos.shape[0]
+    stack, bound = traversal_stack()  # once per call: the mesh search must not allocate
     for c in range(n_col):
         for j in range(6):
             wrench[r, c, j] = 0.0
@@ -503,8 +517,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
             elif kind[c] == MESH:
                 hit, s, sd, n, q = _mesh_closest(c, mesh_rng[c, 4], pose, par, MV, MF, Blo, Bhi,
                                                  Bleft, Bright, Bstart, Bcount, Border, Fn, En,
-                                                 Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, i, p,
-                                                 p, radius)
+                                                 Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, stack,
+                                                 bound, i, p, p, radius)
             else:
                 hit, s, sd, n, q = _shape_closest(c, kind[c], pose, par, p, p, radius)
             if not hit:
@@ -571,8 +585,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
             if kind[c] == MESH:
                 hit, s, sd, n, q = _mesh_closest(c, mesh_rng[c, 4], pose, par, MV, MF, Blo, Bhi,
                                                  Bleft, Bright, Bstart, Bcount, Border, Fn, En,
-                                                 Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, slot,
-                                                 pa, pb, radius)
+                                                 Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, stack,
+                                                 bound, slot, pa, pb, radius)
             else:
                 hit, s, sd, n, q = _shape_closest(c, kind[c], pose, par, pa, pb, radius)
             if not hit or s <= 0.0 or s >= 1.0:

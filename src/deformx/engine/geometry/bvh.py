@@ -246,6 +246,12 @@ def _normalized(x: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy")
+def traversal_stack():
+    """Scratch for one BVH traversal: node ids and their squared box gaps (m^2)."""
+    return np.empty(_STACK, dtype=np.int64), np.empty(_STACK)
+
+
+@njit(cache=True, error_model="numpy")
 def _gap2(lo0: float, hi0: float, lo1: float, hi1: float) -> float:
     """Squared gap (m^2) between intervals [lo0, hi0] and [lo1, hi1] (0 if they overlap)."""
     d = max(lo0 - hi1, lo1 - hi0, 0.0)
@@ -330,7 +336,7 @@ def _beyond(va, vb, vc, p0, p1, slo, shi, reach2) -> bool:
 
 @njit(cache=True, error_model="numpy")
 def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
-                        max_dist, root=0):
+                        max_dist, root=0, stack=None, bound=None):
     """Triangle nearest to segment p0p1 (tuples, m) among those within ``max_dist`` (m).
 
     Returns ``(tri, s, u, v, w, d2)``: the triangle (-1 if none is within ``max_dist``), the
@@ -338,6 +344,8 @@ def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, face
     when tri is -1). ``max_dist = np.inf`` searches the whole mesh. Depth-first, nearer child
     first, pruning boxes farther than the best so far from the segment's bounding box.
     ``root`` is the tree's root node (several trees may share the arrays, see ``pack``).
+    ``stack``, ``bound``: traversal scratch (``traversal_stack``), allocated when not given
+    (a caller compiled without reference counting must pass them: it cannot allocate).
     """
     slo = (min(p0[0], p1[0]), min(p0[1], p1[1]), min(p0[2], p1[2]))
     shi = (max(p0[0], p1[0]), max(p0[1], p1[1]), max(p0[2], p1[2]))
@@ -345,8 +353,8 @@ def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, face
     best = max_dist * max_dist
     tri = -1
     rs = ru = rv = rw = 0.0
-    stack = np.empty(_STACK, dtype=np.int64)
-    bound = np.empty(_STACK)
+    if stack is None:
+        stack, bound = traversal_stack()
     g = _box_gap2(lo, hi, root, slo, shi)
     sp = 0
     if g <= best:
@@ -418,7 +426,7 @@ def signed_side(face_n, edge_n, vertex_n, faces, tri, u, v, w, p, c) -> float:
 
 @njit(cache=True, error_model="numpy")
 def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0, p1, max_dist,
-                  out_tri, out_dist, root=0):
+                  out_tri, out_dist, root=0, stack=None, bound=None):
     """The ``k = len(out_tri)`` triangles nearest to segment p0p1 (m) within ``max_dist`` (m).
 
     Writes their ids and exact distances (m, ascending) to ``out_tri`` and ``out_dist`` and
@@ -426,7 +434,7 @@ def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0,
     ``horizon`` (m) from the segment (``max_dist`` when fewer than k lie within it). A caller
     can keep the list while the segment moves by at most ``delta``: a listed triangle is then
     at least ``out_dist - delta`` away and any other at least ``horizon - delta``. ``root`` as
-    in ``bvh_closest_segment``.
+    in ``bvh_closest_segment``; ``stack``, ``bound`` as there.
     """
     point = p0[0] == p1[0] and p0[1] == p1[1] and p0[2] == p1[2]
     k = out_tri.shape[0]
@@ -435,8 +443,8 @@ def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0,
     mid = lerp(p0, p1, 0.5)
     horizon = max_dist
     n = 0
-    stack = np.empty(_STACK, dtype=np.int64)
-    bound = np.empty(_STACK)
+    if stack is None:
+        stack, bound = traversal_stack()
     g = _box_gap2(lo, hi, root, slo, shi)
     sp = 0
     if g <= horizon * horizon:
