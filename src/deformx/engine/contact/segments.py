@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit
 from numba.core.cpu import CPUTargetOptions
 
-from ..geometry.bvh import bvh_closest_segment, bvh_nearest_k, signed_side, traversal_stack
+from ..geometry.bvh import closest_segment_search, nearest_k_search, signed_side, traversal_stack
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from .primitives import segment_deepest, shape_sdf
 
@@ -162,7 +162,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
 
     The cache holds the triangles nearest to where the slot's segment was when it was filled,
     sorted by their exact distance then, and a horizon that no other triangle comes closer
-    than (``bvh_nearest_k``). After the ends moved by at most ``delta`` every triangle is at
+    than (``nearest_k_search``). After the ends moved by at most ``delta`` every triangle is at
     least its cached distance minus ``delta`` away, so the sorted scan stops at the first
     triangle that cannot beat the best so far (most steps test one or two), and the answer is
     exact while the best found lies within the horizon minus ``delta``; otherwise, or after
@@ -190,8 +190,9 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     refill = qc_meta[slot, Q_COL] != c or moved * math.sqrt(3.0) > skin
     while True:
         if refill:
-            n, far = bvh_nearest_k(lo, hi, left, right, start, count, order, verts, faces, la,
-                                   lb, within, qc_tris[slot], qc_dist[slot], root, stack, bound)
+            n, far = nearest_k_search(lo, hi, left, right, start, count, order, verts, faces,
+                                      la, lb, within, qc_tris[slot], qc_dist[slot], root, stack,
+                                      bound)
             fresh = True
             delta2 = 0.0
             qc_meta[slot, Q_COL] = c
@@ -244,9 +245,9 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
             break  # no triangle left out of the cache can be as near
         if fresh:  # more than the cache's size tie at the nearest distance: search the tree
             qc_meta[slot, Q_COL] = -1
-            tri, s, u, v, w, d2 = bvh_closest_segment(lo, hi, left, right, start, count, order,
-                                                      verts, faces, la, lb, reach, root, stack,
-                                                      bound)
+            tri, s, u, v, w, d2 = closest_segment_search(lo, hi, left, right, start, count,
+                                                         order, verts, faces, la, lb, reach,
+                                                         root, stack, bound)
             return tri, s, u, v, w, d2, True
         refill = True
     if tri < 0:
@@ -279,10 +280,10 @@ def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, B
         # Nothing near the surface: the segment may still be inside a closed mesh, less
         # than the repulsion distance deep (checked when the cache is refilled, or on
         # every call while it is inside).
-        tri, s, u, v, w, d2 = bvh_closest_segment(Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-                                                  Border, MV, MF, la, lb,
-                                                  reach + par[c, P_REPULSION], root, stack,
-                                                  bound)
+        tri, s, u, v, w, d2 = closest_segment_search(Blo, Bhi, Bleft, Bright, Bstart, Bcount,
+                                                     Border, MV, MF, la, lb,
+                                                     reach + par[c, P_REPULSION], root, stack,
+                                                     bound)
         if tri >= 0:
             p = lerp(la, lb, s)
             q = bary_point((MV[MF[tri, 0], 0], MV[MF[tri, 0], 1], MV[MF[tri, 0], 2]),

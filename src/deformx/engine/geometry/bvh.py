@@ -336,7 +336,7 @@ def _beyond(va, vb, vc, p0, p1, slo, shi, reach2) -> bool:
 
 @njit(cache=True, error_model="numpy")
 def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
-                        max_dist, root=0, stack=None, bound=None):
+                        max_dist, root=0):
     """Triangle nearest to segment p0p1 (tuples, m) among those within ``max_dist`` (m).
 
     Returns ``(tri, s, u, v, w, d2)``: the triangle (-1 if none is within ``max_dist``), the
@@ -344,17 +344,23 @@ def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, face
     when tri is -1). ``max_dist = np.inf`` searches the whole mesh. Depth-first, nearer child
     first, pruning boxes farther than the best so far from the segment's bounding box.
     ``root`` is the tree's root node (several trees may share the arrays, see ``pack``).
-    ``stack``, ``bound``: traversal scratch (``traversal_stack``), allocated when not given
-    (a caller compiled without reference counting must pass them: it cannot allocate).
     """
+    stack, bound = traversal_stack()
+    return closest_segment_search(lo, hi, left, right, start, count, order, vertices, faces, p0,
+                                  p1, max_dist, root, stack, bound)
+
+
+@njit(cache=True, error_model="numpy")
+def closest_segment_search(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
+                           max_dist, root, stack, bound):
+    """``bvh_closest_segment`` with its traversal scratch passed in (``traversal_stack``): it
+    allocates nothing, so a caller compiled without reference counting can use it."""
     slo = (min(p0[0], p1[0]), min(p0[1], p1[1]), min(p0[2], p1[2]))
     shi = (max(p0[0], p1[0]), max(p0[1], p1[1]), max(p0[2], p1[2]))
     mid = lerp(p0, p1, 0.5)
     best = max_dist * max_dist
     tri = -1
     rs = ru = rv = rw = 0.0
-    if stack is None:
-        stack, bound = traversal_stack()
     g = _box_gap2(lo, hi, root, slo, shi)
     sp = 0
     if g <= best:
@@ -426,7 +432,7 @@ def signed_side(face_n, edge_n, vertex_n, faces, tri, u, v, w, p, c) -> float:
 
 @njit(cache=True, error_model="numpy")
 def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0, p1, max_dist,
-                  out_tri, out_dist, root=0, stack=None, bound=None):
+                  out_tri, out_dist, root=0):
     """The ``k = len(out_tri)`` triangles nearest to segment p0p1 (m) within ``max_dist`` (m).
 
     Writes their ids and exact distances (m, ascending) to ``out_tri`` and ``out_dist`` and
@@ -434,8 +440,17 @@ def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0,
     ``horizon`` (m) from the segment (``max_dist`` when fewer than k lie within it). A caller
     can keep the list while the segment moves by at most ``delta``: a listed triangle is then
     at least ``out_dist - delta`` away and any other at least ``horizon - delta``. ``root`` as
-    in ``bvh_closest_segment``; ``stack``, ``bound`` as there.
+    in ``bvh_closest_segment``.
     """
+    stack, bound = traversal_stack()
+    return nearest_k_search(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
+                            max_dist, out_tri, out_dist, root, stack, bound)
+
+
+@njit(cache=True, error_model="numpy")
+def nearest_k_search(lo, hi, left, right, start, count, order, vertices, faces, p0, p1, max_dist,
+                     out_tri, out_dist, root, stack, bound):
+    """``bvh_nearest_k`` with its traversal scratch passed in (see ``closest_segment_search``)."""
     point = p0[0] == p1[0] and p0[1] == p1[1] and p0[2] == p1[2]
     k = out_tri.shape[0]
     slo = (min(p0[0], p1[0]), min(p0[1], p1[1]), min(p0[2], p1[2]))
@@ -443,8 +458,6 @@ def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0,
     mid = lerp(p0, p1, 0.5)
     horizon = max_dist
     n = 0
-    if stack is None:
-        stack, bound = traversal_stack()
     g = _box_gap2(lo, hi, root, slo, shi)
     sp = 0
     if g <= horizon * horizon:
