@@ -244,7 +244,8 @@ class World:
         b = self._block
         E, N = b.Q.shape[0], b.pos.shape[0]
         # None without colliders: the kernels then compile without any mesh code.
-        self._cols = col.pack(self._colliders) + query_cache(N + E) if self._colliders else None
+        self._cols = (col.pack(self._colliders) + query_cache(N + E, len(self._rods))
+                      if self._colliders else None)
         if getattr(self, "_col_anchor", None) is None or self._col_anchor.shape[0] != N + E:
             # Friction anchors of nodes, then elements (collider frame) and their colliders.
             self._col_anchor = np.zeros((N + E, 4))

@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from ..geometry.closest import closest_segment_segment
+from ..kernels.refcount import NO_REFCOUNT
 from .segments import _add_K
 
 
@@ -146,7 +147,7 @@ def pair_penalty(m_i, m_j, k_floor, dt_ref, stiffness, damping):
     return k, c
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def pair_contact(i, j, seg_a, seg_b, radius, pos_i, pos_j, vel_i, vel_j, mass, node_kmin,
                  dt_ref, stiffness, damping, mu):
     """Contact of segments i (nodes at ``pos_i``) and j (``pos_j``): (touching, s, t, force
@@ -199,7 +200,7 @@ def pair_contact(i, j, seg_a, seg_b, radius, pos_i, pos_j, vel_i, vel_j, mass, n
     return True, s, t, (f0, f1, f2), n, k, c
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def pair_forces(pairs, n_pairs, seg_a, seg_b, radius, pos, vel, mass, node_kmin, dt_ref,
                 stiffness, damping, mu, out) -> int:
     """Equal and opposite forces of all touching pairs, added to ``out`` (N, per node);

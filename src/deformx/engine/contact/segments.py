@@ -31,10 +31,10 @@ import math
 
 import numpy as np
 from numba import njit
-from numba.core.cpu import CPUTargetOptions
 
-from ..geometry.bvh import closest_segment_search, nearest_k_search, signed_side, traversal_stack
+from ..geometry.bvh import TRAVERSAL_STACK, closest_segment_search, nearest_k_search, signed_side
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
+from ..kernels.refcount import NO_REFCOUNT
 from .primitives import segment_deepest, shape_sdf
 
 MESH = 0
@@ -49,13 +49,6 @@ _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment cros
 # Coplanarity tolerance of a flat patch, relative to the contact reach (5 nm for a 5 mm rope):
 # the largest penetration a near-flat patch's shortcut can misjudge.
 _FLAT_TOL = 1e-6
-# numba option for the per-query mesh search: no reference counting. numba keeps counting the
-# array arguments of any function that calls something able to raise (the search calls the BVH
-# traversals), i.e. two atomic operations per array and call: a third of a curved-mesh step with
-# ~20 collider tables. Safe there: the search allocates nothing (its traversal stack is passed
-# in; numba refuses to compile an allocation without counting) and only borrows the kernel's
-# arrays for the duration of the call. A private numba option: without it, plain counting.
-_NO_REFCOUNT = {"_nrt": False} if hasattr(CPUTargetOptions, "_nrt") else {}
 
 
 @njit(cache=True, error_model="numpy")
@@ -255,7 +248,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     return tri, rs, ru, rv, rw, best, fresh
 
 
-@njit(cache=True, error_model="numpy", **_NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount, Border, Fn,
                   En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound, slot, pa, pb,
                   reach):
@@ -266,7 +259,7 @@ def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, B
     (world)); hit is False when the segment is farther than ``reach``, or when it provably
     touches nothing beyond what its ends touch (see ``_mesh_nearest``). ``slot`` names the
     query (node i or element N + e) in the query cache; ``stack``, ``bound``: BVH traversal
-    scratch. Compiled without reference counting (see ``_NO_REFCOUNT``); the packed tables use
+    scratch. Compiled without reference counting (see :mod:`deformx.engine.kernels.refcount`); the packed tables use
     global indices (see ``pack``) so that no per-query views are needed.
     """
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
@@ -473,10 +466,13 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
     (kind, pose, twist, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-     Border, Fn, En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist) = cols
+     Border, Fn, En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, tr_stack, tr_bound) = cols
     n_col = kind.shape[0]
     n_nodes = pos.shape[0]
-    stack, bound = traversal_stack()  # once per call: the mesh search must not allocate
+    # The rod's own BVH traversal scratch: nothing here allocates (see NO_REFCOUNT), and rods
+    # stepped on different threads never share it.
+    stack = tr_stack[r]
+    bound = tr_bound[r]
     for c in range(n_col):
         for j in range(6):
             wrench[r, c, j] = 0.0
@@ -650,13 +646,14 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     return count
 
 
-def query_cache(n_slots: int) -> tuple:
+def query_cache(n_slots: int, n_rods: int) -> tuple:
     """Empty mesh query caches for ``n_slots`` queries (nodes, then elements; see
     ``_mesh_nearest``): per query the integers (collider (-1: none), count, the flat patch's
     face (-1: not flat), and per end the cache entry whose face held it last (-1: none)), the
     floats (the segment's ends when filled (m), the horizon (m)), the nearest triangles and
-    their distances then (m)."""
+    their distances then (m); and per rod a BVH traversal stack (node ids, squared gaps)."""
     meta = np.full((n_slots, 5), -1, dtype=np.int64)
     meta[:, Q_N] = 0
     return (meta, np.zeros((n_slots, 7)), np.zeros((n_slots, QUERY_CACHE), dtype=np.int64),
-            np.zeros((n_slots, QUERY_CACHE)))
+            np.zeros((n_slots, QUERY_CACHE)), np.zeros((n_rods, TRAVERSAL_STACK), dtype=np.int64),
+            np.zeros((n_rods, TRAVERSAL_STACK)))

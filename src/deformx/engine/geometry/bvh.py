@@ -30,7 +30,7 @@ from deformx.engine.geometry.closest import (
 )
 
 LEAF_SIZE = 4  # triangles per leaf at most
-_STACK = 64  # traversal stack; a balanced tree of F triangles needs about log2(F) entries
+TRAVERSAL_STACK = 64  # entries; a balanced tree of F triangles needs about log2(F)
 # Barycentric below this fraction of u + v + w counts as zero when picking the closest feature;
 # far above round-off, and harmless when wrong (a nearby feature's pseudonormal has the same
 # sign of dot(p - c, n) unless the surface folds back on itself there).
@@ -113,7 +113,7 @@ def build_bvh(vertices: np.ndarray, faces: np.ndarray):
     count = np.zeros(max_nodes, dtype=np.int64)
     order = np.arange(n_faces, dtype=np.int64)
 
-    stack = np.empty(_STACK, dtype=np.int64)
+    stack = np.empty(TRAVERSAL_STACK, dtype=np.int64)
     start[0] = 0
     count[0] = n_faces
     n_nodes = 1
@@ -248,7 +248,7 @@ def _normalized(x: np.ndarray) -> np.ndarray:
 @njit(cache=True, error_model="numpy")
 def traversal_stack():
     """Scratch for one BVH traversal: node ids and their squared box gaps (m^2)."""
-    return np.empty(_STACK, dtype=np.int64), np.empty(_STACK)
+    return np.empty(TRAVERSAL_STACK, dtype=np.int64), np.empty(TRAVERSAL_STACK)
 
 
 @njit(cache=True, error_model="numpy")

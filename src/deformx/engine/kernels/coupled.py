@@ -17,7 +17,21 @@ from numba import njit
 
 from ..contact.rodrod import build_pairs, max_displacement, pair_forces
 from .implicit import advance_rod_implicit
+from .refcount import NO_REFCOUNT
 from .verlet import OK, advance_rod
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def _step_rods(n_rods, t, dt, gravity, max_strain, rod_args, extra, status, times, first, last):
+    """One explicit step of every rod with the rod-rod forces ``extra``; returns the first rod
+    that diverged, or -1. A function of its own, without reference counting: unpacking the ~55
+    rod arrays for each rod and step would otherwise cost two atomic operations per array."""
+    for r in range(n_rods):
+        times[r] = advance_rod(r, 1, t, dt, gravity, max_strain, *rod_args, extra, True,
+                               not first, not last)
+        if status[r, 0] != OK:
+            return r
+    return -1
 
 
 @njit(cache=True, error_model="numpy")
@@ -57,12 +71,11 @@ def advance_world_verlet(n_steps, t, dt, gravity, max_strain, n_rods, rod_args, 
                 extra[i, d] = 0.0
         state[3] = pair_forces(pairs, state[0], seg_a, seg_b, seg_radius, xp, vel, mass,
                                node_kmin, dt, rr[0], rr[1], rr[2], extra)
-        for r in range(n_rods):
-            times[r] = advance_rod(r, 1, t, dt, gravity, max_strain, *rod_args, extra, True,
-                                   step > 0, step < n_steps - 1)
-            if status[r, 0] != OK:
-                status[r, 2] = step
-                return pairs
+        bad = _step_rods(n_rods, t, dt, gravity, max_strain, rod_args, extra, status, times,
+                         step == 0, step == n_steps - 1)
+        if bad >= 0:
+            status[bad, 2] = step
+            return pairs
         t = times[0]
     for r in range(n_rods):
         status[r, 2] = n_steps

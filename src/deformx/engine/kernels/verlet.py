@@ -16,6 +16,7 @@ from numba import njit
 from ..contact.plane import plane_contact_node, plane_penalty
 from ..contact.segments import rod_collider_contacts
 from .cosserat import rod_extent, rod_internal_loads
+from .refcount import NO_REFCOUNT
 from .so3 import rotate_directors
 
 # Divergence codes returned in status[r, 0].
@@ -87,7 +88,7 @@ def _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain):
     return OK, -1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def advance_rod(
     r, n_steps, t, dt, gravity, max_strain,
     rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
