@@ -151,7 +151,7 @@ def _moved(qc_geo, slot, la, lb) -> float:
 def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, Fg, la,
                   lb, reach, skin, two_sided, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound):
     """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache;
-    ``stack``, ``bound``: BVH traversal scratch (``traversal_stack``).
+    ``stack``, ``bound``: BVH traversal scratch (the rod's row of ``query_cache``'s).
 
     The cache holds the triangles nearest to where the slot's segment was when it was filled,
     sorted by their exact distance then, and a horizon that no other triangle comes closer
@@ -259,8 +259,8 @@ def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, B
     (world)); hit is False when the segment is farther than ``reach``, or when it provably
     touches nothing beyond what its ends touch (see ``_mesh_nearest``). ``slot`` names the
     query (node i or element N + e) in the query cache; ``stack``, ``bound``: BVH traversal
-    scratch. Compiled without reference counting (see :mod:`deformx.engine.kernels.refcount`); the packed tables use
-    global indices (see ``pack``) so that no per-query views are needed.
+    scratch. Compiled without reference counting (see :mod:`deformx.engine.kernels.refcount`);
+    the packed tables use global indices (see ``pack``) so that no per-query views are needed.
     """
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
@@ -355,6 +355,7 @@ def collider_penalty(par, c, mass, k_floor, dt_ref):
 
 @njit(cache=True, error_model="numpy")
 def _to_world(pose, c, x0, x1, x2):
+    """World position (m) of point x given in collider c's frame."""
     y = _rotate(pose, c, x0, x1, x2)
     return y[0] + pose[c, 0, 3], y[1] + pose[c, 1, 3], y[2] + pose[c, 2, 3]
 
