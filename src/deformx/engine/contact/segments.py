@@ -69,6 +69,13 @@ def _rotate(pose, c, x0, x1, x2):
 
 
 @njit(cache=True, error_model="numpy")
+def _to_world(pose, c, x0, x1, x2):
+    """World position (m) of point x given in collider c's frame."""
+    y = _rotate(pose, c, x0, x1, x2)
+    return y[0] + pose[c, 0, 3], y[1] + pose[c, 1, 3], y[2] + pose[c, 2, 3]
+
+
+@njit(cache=True, error_model="numpy")
 def _height(Fg, f, x) -> float:
     """Height (m) of x above face f's plane (see :mod:`deformx.engine.geometry.faces`)."""
     return Fg[f, 0, 0] * x[0] + Fg[f, 0, 1] * x[1] + Fg[f, 0, 2] * x[2] - Fg[f, 0, 3]
@@ -176,8 +183,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     fresh = False
     within = reach + skin
     if qc_meta[slot, Q_COL] == c:
-        for d in range(3):
-            moved = max(moved, abs(la[d] - qc_geo[slot, d]), abs(lb[d] - qc_geo[slot, 3 + d]))
+        moved = _moved(qc_geo, slot, la, lb)
         delta2 = max(dist2(la, (qc_geo[slot, 0], qc_geo[slot, 1], qc_geo[slot, 2])),
                      dist2(lb, (qc_geo[slot, 3], qc_geo[slot, 4], qc_geo[slot, 5])))
     refill = qc_meta[slot, Q_COL] != c or moved * math.sqrt(3.0) > skin
@@ -315,9 +321,7 @@ def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, B
                 n = (-n[0], -n[1], -n[2])
     if sd > reach:
         return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
-    nw = _rotate(pose, c, n[0], n[1], n[2])
-    qw = _rotate(pose, c, q[0], q[1], q[2])
-    return True, s, sd, nw, (qw[0] + pose[c, 0, 3], qw[1] + pose[c, 1, 3], qw[2] + pose[c, 2, 3])
+    return True, s, sd, _rotate(pose, c, n[0], n[1], n[2]), _to_world(pose, c, q[0], q[1], q[2])
 
 
 @njit(cache=True, error_model="numpy")
@@ -334,9 +338,8 @@ def _shape_closest(c, kind, pose, par, pa, pb, reach):
     sd, n0, n1, n2 = shape_sdf(kind, shape, p0, p1, p2)
     if sd > reach:
         return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
-    nw = _rotate(pose, c, n0, n1, n2)
-    qw = _rotate(pose, c, p0 - sd * n0, p1 - sd * n1, p2 - sd * n2)
-    return True, s, sd, nw, (qw[0] + pose[c, 0, 3], qw[1] + pose[c, 1, 3], qw[2] + pose[c, 2, 3])
+    return True, s, sd, _rotate(pose, c, n0, n1, n2), _to_world(pose, c, p0 - sd * n0,
+                                                                 p1 - sd * n1, p2 - sd * n2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -351,13 +354,6 @@ def collider_penalty(par, c, mass, k_floor, dt_ref):
     if damp < 0.0:
         damp = 2.0 * math.sqrt(k * mass)
     return k, damp
-
-
-@njit(cache=True, error_model="numpy")
-def _to_world(pose, c, x0, x1, x2):
-    """World position (m) of point x given in collider c's frame."""
-    y = _rotate(pose, c, x0, x1, x2)
-    return y[0] + pose[c, 0, 3], y[1] + pose[c, 1, 3], y[2] + pose[c, 2, 3]
 
 
 @njit(cache=True, error_model="numpy")

@@ -2,8 +2,9 @@
 
 ``face_frames(V, F)[f]`` is a 3 x 4 table of affine maps ``g . x - o`` (row ``(g, o)``): row 0
 gives the height (m) of x above the face's plane (unit normal ``g``), rows 1 and 2 the
-barycentrics ``v`` and ``w`` of x's projection onto the plane (``u = 1 - v - w``). The projection lies in the face iff ``u, v, w >= 0``. Degenerate faces get
-NaN maps, so no point is ever found inside them.
+barycentrics ``v`` and ``w`` of x's projection onto the plane (``u = 1 - v - w``). The
+projection lies in the face iff ``u, v, w >= 0``. Degenerate faces get NaN maps, so no point
+is ever found inside them.
 """
 
 from __future__ import annotations
