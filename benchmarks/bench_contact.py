@@ -123,11 +123,11 @@ def internal_forces_seconds(world: dx.World, repeats: int, calls: int = 20000) -
         for _ in range(n):
             rod_internal_loads(0, *args)
 
-    b = world._block
-    args = (b.rod_node0, b.rod_elem0, b.rod_vor0, b.rod_ne, b.rod_closed, b.pos, b.vel, b.Q,
-            b.omega, b.J, b.S, b.rest_len, b.rest_sigma, b.B, b.rest_vor, b.rest_kappa, b.force,
-            b.torque, b.dil, b.kappa, b.stress, b.couple, b.scr_C, b.scr_X,
-            b.scr_edot)
+    b = world.arrays
+    args = tuple(b[k] for k in (
+        "node0", "elem0", "vor0", "ne", "closed", "pos", "vel", "Q", "omega", "J", "S",
+        "rest_len", "rest_sigma", "B", "rest_vor", "rest_kappa", "force", "torque", "dil",
+        "kappa", "stress", "couple", "scr_C", "scr_X", "scr_edot"))
     loop(10, args)
 
     def once():

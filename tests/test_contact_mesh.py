@@ -245,7 +245,7 @@ def test_flat_patch_shortcut_agrees_with_the_exact_search():
         world.add_mesh((Vr, F), pose=(origin, R), friction=0.0)
         world.step(2)  # the first step fills the query caches, the second uses them
         forces.append(world.contact_forces(rod))
-        flat.append(world._cols[-6][:, Q_FLAT])  # per query: the flat patch's face, or -1
+        flat.append(world.arrays["qc_meta"][:, Q_FLAT].copy())  # per query: the flat patch's face, or -1
     # Both paths ran (on the rough floor only queries over a single triangle stay "flat").
     assert np.all(flat[0] >= 0) and np.mean(flat[1] < 0) > 0.5
     scale = np.abs(forces[1]).max()

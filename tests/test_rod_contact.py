@@ -111,10 +111,10 @@ def test_broad_phase_finds_every_touching_pair_and_prunes_distant_rods():
         rods.append(world.add_rod(rope(10, start, d, 0.05)))
     far = [world.add_rod(rope(10, (1.0 + i, 0, 0), (0, 1, 0), 0.05)) for i in range(5)]
     world.step(1)
-    pairs = world._pairs[: world.contact_stats()["candidate_pairs"]]
+    pairs = world.arrays["pairs"][: world.contact_stats()["candidate_pairs"]]
     found = {(int(i), int(j)) for i, j in pairs}
-    seg_rod = world._seg_tables[2]
-    e0 = world._block.rod_elem0
+    seg_rod = world.arrays["seg_rod"]
+    e0 = world.arrays["elem0"]
     # Brute force: every pair of segments of different rods closer than 2 r.
     for ia, ra in enumerate(rods):
         for ib in range(ia + 1, len(rods)):

@@ -1,4 +1,12 @@
-"""Clamps: prescribed position (and material frame) of a node/element, drivable between steps."""
+"""Clamps: a rod node (and optionally an element's material frame) held by a kinematic driver.
+
+The clamp's driver has its origin at the clamped node and, for a frame clamp, the rotation
+``directors^T`` (world-from-material), so ``clamp.directors`` are the element's rows d1, d2, d3.
+Between calls to :meth:`Clamp.set_pose` / :meth:`~Clamp.set_velocity` /
+:meth:`~deformx.engine.drivers.Driver.set_acceleration` it moves as its driver is integrated
+(see :mod:`deformx.engine.drivers`), so a robot gripper can drive a rod end by updating the
+clamp once per control step.
+"""
 
 from __future__ import annotations
 
@@ -6,105 +14,82 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from .kernels.so3 import axis_angle_matrix
-from .validation import vector3
+from .drivers import Driver, vec3
+from .kernels.bundles import D_P, D_R, D_V, D_W
 
 if TYPE_CHECKING:
     from .rod import Rod
 
 
-class Clamp:
-    """Holds a rod node at a position and (optionally) an element at a material frame.
-
-    Between calls to :meth:`set_pose` / :meth:`set_velocity` the pose moves at the set linear
-    (m/s) and angular (rad/s, lab frame) velocity, so a robot gripper can drive a rod end along
-    a trajectory by updating the clamp once per control step.
-    """
+class Clamp(Driver):
+    """Holds rod node ``node`` at a position and (optionally) element ``element`` at a
+    material frame; reports the rod's load on it (:attr:`force`, :attr:`torque`,
+    :attr:`impulse`)."""
 
     def __init__(self, rod: "Rod", node: int, element: int | None) -> None:
+        super().__init__()
         self.rod = rod
         self.node = int(node)
         self.element = None if element is None else int(element)
-        self._t0 = self._now()
-        self._pos0 = rod.positions[self.node].copy()
-        self._Q0 = None if element is None else rod.directors[self.element].copy()
-        self._vel = np.zeros(3)
-        self._omega = np.zeros(3)
-
-    def _now(self) -> float:
-        world = self.rod._world
-        return 0.0 if world is None else world.time
-
-    def _changed(self) -> None:
-        if self.rod._world is not None:
-            self.rod._world._dirty = True
+        self._own[D_P:D_P + 3] = rod.positions[self.node]
+        if element is not None:
+            self._set_rotation(rod.directors[self.element].T)
 
     @property
     def holds_frame(self) -> bool:
         """True if the clamp also fixes the material frame of its element."""
-        return self._Q0 is not None
-
-    @property
-    def position(self) -> np.ndarray:
-        """Clamp position now (m)."""
-        return self._pos0 + (self._now() - self._t0) * self._vel
+        return self.element is not None
 
     @property
     def directors(self) -> np.ndarray | None:
         """Clamped material frame now, rows d1, d2, d3 (None for a pin)."""
-        if self._Q0 is None:
+        if self.element is None:
             return None
-        tau = self._now() - self._t0
-        speed = float(np.linalg.norm(self._omega))
-        R = axis_angle_matrix(self._omega, speed * tau)
-        return self._Q0 @ R.T
-
-    @property
-    def velocity(self) -> np.ndarray:
-        """Linear velocity (m/s)."""
-        return self._vel.copy()
-
-    @property
-    def angular_velocity(self) -> np.ndarray:
-        """Angular velocity (rad/s, lab frame)."""
-        return self._omega.copy()
-
-    def _rebase(self) -> None:
-        pos, Q = self.position, self.directors
-        self._t0 = self._now()
-        self._pos0 = pos
-        if Q is not None:
-            self._Q0 = Q
+        return self._row[D_R:D_R + 9].reshape(3, 3).T.copy()
 
     def set_pose(self, position: Sequence[float] | None = None,
-                 directors: np.ndarray | None = None) -> None:
+                 directors: np.ndarray | None = None, rotation: np.ndarray | None = None) -> None:
         """Move the clamp now to ``position`` (m) and, for a frame clamp, ``directors``
-        (3x3 rotation, rows d1, d2, d3)."""
-        self._rebase()
+        (3x3 rotation, rows d1, d2, d3) or ``rotation`` (world-from-material, its transpose)."""
         if position is not None:
-            self._pos0 = vector3("position", position)
-        if directors is not None:
-            if self._Q0 is None:
-                raise ValueError("directors: this clamp is a pin (position only); use fix_start/fix_end")
-            Q = np.asarray(directors, dtype=np.float64)
-            if Q.shape != (3, 3) or not np.allclose(Q @ Q.T, np.eye(3), atol=1e-8) or np.linalg.det(Q) < 0:
-                raise ValueError("directors must be a 3x3 proper rotation matrix (rows d1, d2, d3)")
-            self._Q0 = Q.copy()
-        self._changed()
+            self._row[D_P:D_P + 3] = vec3("position", position)
+        for name, R in (("directors", directors), ("rotation", rotation)):
+            if R is None:
+                continue
+            if self.element is None:
+                raise ValueError(f"{name}: this clamp is a pin (position only); use "
+                                 "fix_start/fix_end")
+            Q = np.asarray(R, dtype=np.float64)
+            if (Q.shape != (3, 3) or not np.all(np.isfinite(Q))
+                    or not np.allclose(Q @ Q.T, np.eye(3), atol=1e-8) or np.linalg.det(Q) < 0):
+                raise ValueError(f"{name} must be a 3x3 proper rotation matrix"
+                                 + (" (rows d1, d2, d3)" if name == "directors" else ""))
+            self._set_rotation(Q.T if name == "directors" else Q)
 
     def set_velocity(self, velocity: Sequence[float] | None = None,
-                     angular_velocity: Sequence[float] | None = None) -> None:
-        """Set the clamp's linear (m/s) and angular (rad/s, lab frame) velocity from now on."""
-        self._rebase()
+                     angular_velocity: Sequence[float] | None = None, *,
+                     linear: Sequence[float] | None = None,
+                     angular: Sequence[float] | None = None) -> None:
+        """Set the clamp's linear (m/s) and angular (rad/s, world frame) velocity from now on
+        (``linear`` / ``angular`` are the same as for colliders); None keeps one as it is."""
+        velocity = linear if velocity is None else velocity
+        angular_velocity = angular if angular_velocity is None else angular_velocity
+        row = self._row
         if velocity is not None:
-            self._vel = vector3("velocity", velocity)
+            row[D_V:D_V + 3] = vec3("velocity", velocity)
         if angular_velocity is not None:
-            if self._Q0 is None:
-                raise ValueError("angular_velocity: this clamp is a pin (position only)")
-            self._omega = vector3("angular_velocity", angular_velocity)
-        self._changed()
+            row[D_W:D_W + 3] = self._check_spin("angular_velocity",
+                                                vec3("angular_velocity", angular_velocity))
+
+    def _check_spin(self, name: str, w: np.ndarray) -> np.ndarray:
+        if self.element is None and np.any(w != 0.0):
+            raise ValueError(f"{name}: this clamp is a pin (position only)")
+        return w
 
     def release(self) -> None:
         """Remove the clamp from its rod."""
-        self.rod._clamps.remove(self)
-        self._changed()
+        self.rod._remove_clamp(self)
+
+    def __repr__(self) -> str:
+        kind = "frame" if self.element is not None else "pin"
+        return f"Clamp({kind}, node={self.node}, position={self.position.round(4).tolist()})"

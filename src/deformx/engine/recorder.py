@@ -15,7 +15,8 @@ if TYPE_CHECKING:
 
 class Recorder:
     """Stores ``time``, ``rod{i}_positions`` (T, n+1, 3) and ``rod{i}_directors`` (T, n, 3, 3)
-    every ``every`` seconds of simulated time while ``world.run(..., recorder=rec)`` runs."""
+    every ``every`` seconds of simulated time while ``world.run(..., recorder=rec)`` (or
+    ``callbacks=[rec]``) runs: a callback like any other."""
 
     def __init__(self, world: "World", every: float = 0.01, directors: bool = True) -> None:
         self.world = world
@@ -28,6 +29,9 @@ class Recorder:
     def due(self) -> bool:
         """True when at least ``every`` s have passed since the last sample."""
         return not self.times or self.world.time - self.times[-1] >= self.every - 0.5 * self.world.dt
+
+    def __call__(self, world: "World") -> None:
+        self.sample()
 
     def sample(self) -> None:
         """Store the current state now."""

@@ -148,6 +148,7 @@ class Rod:
         self._world: World | None = None
         self._index = -1
         self._clamps: list[Clamp] = []
+        self._group = 0
 
     # ------------------------------------------------------------------ factories
     @classmethod
@@ -241,7 +242,7 @@ class Rod:
     def damping(self, value: float) -> None:
         self._damping = check.non_negative("damping", value, "1/s")
         if self._world is not None:
-            self._world._dirty = True
+            self._world._rod_parameters_changed()
 
     @property
     def internal_damping(self) -> float:
@@ -257,7 +258,42 @@ class Rod:
     def internal_damping(self, value: float) -> None:
         self._internal_damping = check.non_negative("internal_damping", value, "s")
         if self._world is not None:
-            self._world._dirty = True
+            self._world._rod_parameters_changed()
+
+    @property
+    def contact_group(self) -> int:
+        """Rods of different contact groups never touch each other (the environments of a
+        batch sharing one world); default 0."""
+        return self._group
+
+    @contact_group.setter
+    def contact_group(self, value: int) -> None:
+        if not isinstance(value, (int, np.integer)) or isinstance(value, bool):
+            raise ValueError(f"contact_group must be an integer, got {value!r}")
+        self._group = int(value)
+        if self._world is not None:
+            self._world._rod_parameters_changed()
+
+    def ignore(self, *colliders) -> None:
+        """Never touch these colliders (e.g. the gripper geom this rod is attached to)."""
+        if self._world is None:
+            raise ValueError("ignore: add the rod to a world first")
+        self._world._ignore(self, colliders)
+
+    # ------------------------------------------------------------------ state
+    def get_state(self) -> dict:
+        """A copy of everything of this rod that the next step depends on (positions,
+        velocities, frames, solver memory, friction anchors, its clamps' drivers): numpy
+        arrays, picklable. Restore with :meth:`set_state` (one environment of a batch)."""
+        if self._world is None:
+            raise ValueError("get_state: the rod is not in a world")
+        return self._world._rod_state(self)
+
+    def set_state(self, state: dict) -> None:
+        """Restore what :meth:`get_state` returned (of this rod, in this world)."""
+        if self._world is None:
+            raise ValueError("set_state: the rod is not in a world")
+        self._world._set_rod_state(self, state)
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -322,8 +358,13 @@ class Rod:
         clamp = Clamp(self, node, element)
         self._clamps.append(clamp)
         if self._world is not None:
-            self._world._dirty = True
+            self._world._register_clamp(clamp)
         return clamp
+
+    def _remove_clamp(self, clamp: Clamp) -> None:
+        self._clamps.remove(clamp)
+        if self._world is not None:
+            self._world._release_clamp(clamp)
 
     def fix_start(self) -> Clamp:
         """Clamp the first node and first element's frame where they are now."""

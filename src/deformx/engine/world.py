@@ -1,57 +1,36 @@
-"""World: the rods, the environment (gravity, planes, meshes, primitives), clamps, time, and
-the integrator."""
+"""World: the rods, the environment (gravity, planes, meshes, primitives), drivers, time and the
+integrator. It builds the packed buffers (``model.py``, ``packing.py``), hands them to one entry
+kernel per integrator (``kernels/step.py``) and keeps handles (rods, clamps, colliders) as
+views with an index into them."""
 
 from __future__ import annotations
 
-import math
-import os
-from concurrent.futures import ThreadPoolExecutor
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
 from ..errors import SimulationDiverged
+from . import running
 from . import validation as check
 from .contact import colliders as col
-from .contact.segments import P_AUTO, P_C, P_K, P_MUK, P_MUS, query_cache
-from .kernels import coupled, implicit, verlet
-from .layout import Block
+from .contact.segments import P_AUTO, P_C, P_K, P_MUK, P_MUS
+from .drivers import Driver
+from .kernels import implicit, step, verlet
+from .kernels.bundles import (
+    D_A, D_AL, D_COLS, D_P, D_R, D_V, D_W, OPT_COUPLED, OPT_ITER, OPT_LEN, OPT_LOAD, OPT_R0,
+    OPT_R1, OPT_STORE, SIM_DT, SIM_G, SIM_LEN, SIM_MAX_STRAIN, SIM_RR, SIM_SKIN, SIM_T, SIM_TOL,
+)
+from .kernels.step import advance_drivers
+from .model import pack_rods, set_damping
+from .packing import Packed
 from .rod import Rod
+from .state import WorldState, put_rod, rod_slices, take_rod
+from .threads import MIN_THREADED_WORK, balanced_groups, default_threads, pool
 
 if TYPE_CHECKING:
     from .recorder import Recorder
 
 INTEGRATORS = ("verlet", "stable")
-# Element-steps below which one call is too short to be worth handing to threads.
-_MIN_THREADED_WORK = 20_000
-_POOL: ThreadPoolExecutor | None = None
-
-
-def default_threads() -> int:
-    """Worker threads for multi-rod worlds: ``DEFORMX_NUM_THREADS`` or the usable cores."""
-    env = os.environ.get("DEFORMX_NUM_THREADS")
-    if env:
-        return check.integer_at_least("DEFORMX_NUM_THREADS", int(env), 1)
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
-
-
-def _pool(n: int) -> ThreadPoolExecutor:
-    global _POOL
-    if _POOL is None or _POOL._max_workers < n:
-        _POOL = ThreadPoolExecutor(max_workers=n, thread_name_prefix="deformx")
-    return _POOL
-
-
-def _balanced_groups(rod_ne: np.ndarray, n_groups: int) -> list[tuple[int, int]]:
-    """Split rods into at most ``n_groups`` contiguous ranges of similar element count."""
-    n_rods = rod_ne.shape[0]
-    n_groups = max(1, min(n_groups, n_rods))
-    cuts = np.searchsorted(np.cumsum(rod_ne), np.arange(1, n_groups) * rod_ne.sum() / n_groups)
-    bounds = [0, *sorted(set(int(c) + 1 for c in cuts)), n_rods]
-    return [(a, b) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
 _REASONS = {
     verlet.NOT_FINITE: "a position, frame or load became NaN/inf",
     verlet.RUNAWAY_STRETCH: "runaway stretch (element strain beyond max_strain)",
@@ -61,7 +40,7 @@ _REASONS = {
 
 
 class World:
-    """A simulation: rods, gravity, contact planes, clamps; advances them together.
+    """A simulation: rods, gravity, contact planes, colliders, clamps; advances them together.
 
     ``gravity`` in m/s^2, ``dt`` in s. ``integrator="verlet"`` is PyElastica's position
     Verlet (explicit; needs dt below roughly ``min(dl, 2r) sqrt(rho/E) / 4``).
@@ -78,7 +57,12 @@ class World:
     neighbours along a rod excluded) with Coulomb coefficient ``rod_friction``; its penalty
     ``rod_contact_stiffness`` (N/m) and ``rod_contact_damping`` (N s/m) default to a stiff,
     critically damped contact chosen from the masses and ``dt``. Rods that touch each other
-    advance together, one step at a time, on one thread.
+    advance together, one step at a time, on one thread; rods of different
+    ``Rod.contact_group`` never touch.
+
+    Clamps and colliders are kinematic drivers (see :mod:`deformx.engine.drivers`): set their
+    pose, velocity and acceleration between steps (or many at once with :meth:`set_drivers`)
+    without rebuilding anything; they move on inside ``step(n)``.
     """
 
     def __init__(self, gravity: Sequence[float] = (0.0, 0.0, -9.81), dt: float = 1e-4,
@@ -90,19 +74,18 @@ class World:
         if integrator not in INTEGRATORS:
             raise ValueError(f"integrator must be one of {INTEGRATORS}, got {integrator!r}")
         self.integrator = integrator
-        self.gravity = check.vector3("gravity", gravity)
+        self._sim = np.zeros(SIM_LEN)
         self._dt = check.positive("dt", dt, "s")
-        self.max_strain = check.positive("max_strain", max_strain)
-        self.iterations = check.integer_at_least("iterations", iterations, 1)
-        self.tolerance = check.positive("tolerance", tolerance)
+        self.gravity = gravity
+        self.max_strain = max_strain
+        self.iterations = iterations
+        self.tolerance = tolerance
         self.threads = default_threads() if threads is None else check.integer_at_least(
             "threads", threads, 1)
+        self._stale_env = True
         self.time = 0.0
         self._rods: list[Rod] = []
         self._planes: list[np.ndarray] = []
-        self._block: Block | None = None
-        self._dirty = True
-        self._planes_arr = np.zeros((0, 11))
         if not isinstance(rod_contact, (bool, np.bool_)):
             raise ValueError(f"rod_contact must be True or False, got {rod_contact!r}")
         self.rod_contact = bool(rod_contact)
@@ -113,10 +96,17 @@ class World:
                 "rod_contact_damping", rod_contact_damping, "N s/m"),
             check.non_negative("rod_friction", rod_friction)])
         self._colliders: list[col.Collider] = []
-        self._cols = None
-        self._wrench = np.zeros((0, 0, 6))
+        self._ignored: set[tuple[int, int]] = set()
+        # Buffers (rebuilt when stale), the driver table and the rod-rod pair list.
+        self._rods_p: Packed | None = None
+        self._env: Packed | None = None
+        self._cols_p: Packed | None = None
+        self._stale_rods = True
+        self._stale_env = True
+        self._drv = np.zeros((0, D_COLS))
+        self._imp_base = np.zeros((0, 6))
+        self._free_rows: list[int] = []
         self._pairs = np.zeros((64, 2), dtype=np.int64)
-        self._pair_state = np.zeros(4, dtype=np.int64)  # pairs, valid, builds, touching
 
     # ------------------------------------------------------------------ building
     @property
@@ -127,7 +117,44 @@ class World:
     @dt.setter
     def dt(self, value: float) -> None:
         self._dt = check.positive("dt", value, "s")
-        self._dirty = True
+        self._stale_env = True
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """Gravity (m/s^2, world frame); may be changed between steps."""
+        return self._sim[SIM_G:SIM_G + 3].copy()
+
+    @gravity.setter
+    def gravity(self, value: Sequence[float]) -> None:
+        self._sim[SIM_G:SIM_G + 3] = check.vector3("gravity", value)
+
+    @property
+    def max_strain(self) -> float:
+        """Element strain beyond which a run is declared diverged."""
+        return float(self._sim[SIM_MAX_STRAIN])
+
+    @max_strain.setter
+    def max_strain(self, value: float) -> None:
+        self._sim[SIM_MAX_STRAIN] = check.positive("max_strain", value)
+
+    @property
+    def tolerance(self) -> float:
+        """Newton tolerance of the stable integrator (update size / element length)."""
+        return float(self._sim[SIM_TOL])
+
+    @tolerance.setter
+    def tolerance(self, value: float) -> None:
+        self._sim[SIM_TOL] = check.positive("tolerance", value)
+
+    @property
+    def iterations(self) -> int:
+        """Newton iterations per step of the stable integrator (at most)."""
+        return self._iterations
+
+    @iterations.setter
+    def iterations(self, value: int) -> None:
+        self._iterations = check.integer_at_least("iterations", value, 1)
+        self._stale_env = True
 
     @property
     def rods(self) -> tuple[Rod, ...]:
@@ -142,8 +169,12 @@ class World:
         rod._world = self
         rod._index = len(self._rods)
         self._rods.append(rod)
-        self._block = Block(self._rods)
-        self._dirty = True
+        for c in rod._clamps:
+            self._register_driver(c)
+        # Pack now so the rod's arrays are views from here on (as documented).
+        self._rods_p = pack_rods(self._rods, self._dt)
+        self._stale_rods = False
+        self._stale_env = True
         return rod
 
     def add_plane(self, point: Sequence[float] = (0.0, 0.0, 0.0),
@@ -163,8 +194,7 @@ class World:
         par = col.contact_params(stiffness, damping, friction, static_friction, kinetic_friction)
         self._planes.append(np.array([*p, *n, par[P_K], par[P_C], par[P_MUS], par[P_MUK],
                                       par[P_AUTO]]))
-        self._planes_arr = np.array(self._planes)
-        self._dirty = True
+        self._stale_env = True
         return len(self._planes) - 1
 
     # ------------------------------------------------------------------ colliders
@@ -174,7 +204,8 @@ class World:
         if mesh is not None:
             col.prepare_mesh(c)
         self._colliders.append(c)
-        self._dirty = True
+        self._register_driver(c)
+        self._stale_env = True
         return c
 
     def add_mesh(self, mesh: object, pose: object = None, stiffness: float | None = None,
@@ -234,205 +265,222 @@ class World:
     def colliders(self) -> tuple[col.Collider, ...]:
         return tuple(self._colliders)
 
-    def _collider_wrench(self, index: int) -> np.ndarray:
-        if self._wrench.shape[1] <= index:
+    def _ignore(self, rod: Rod, colliders: Sequence[col.Collider]) -> None:
+        for c in colliders:
+            if not isinstance(c, col.Collider) or c._world is not self:
+                raise ValueError(f"ignore: {c!r} is not a collider of this world")
+            self._ignored.add((rod._index, c.index))
+        self._stale_env = True
+
+    # ------------------------------------------------------------------ drivers
+    def _register_driver(self, d: Driver) -> None:
+        """Give driver handle ``d`` a row of the table (a released row if there is one)."""
+        row = d._own
+        if self._free_rows:
+            index = self._free_rows.pop()
+            self._drv[index] = row
+        else:
+            index = self._drv.shape[0]
+            self._drv = np.vstack([self._drv, row[None]])
+            self._imp_base = np.vstack([self._imp_base, np.zeros((1, 6))])
+        self._imp_base[index] = 0.0
+        d._world = self
+        d._driver = index
+
+    def _register_clamp(self, clamp) -> None:
+        self._register_driver(clamp)
+        self._stale_env = True
+
+    def _release_clamp(self, clamp) -> None:
+        self._free_rows.append(clamp._driver)
+        clamp._own = clamp._row.copy()
+        clamp._world = None
+        clamp._driver = -1
+        self._stale_env = True
+
+    def _driver_load(self, d: int) -> np.ndarray:
+        env = self._env
+        if env is None or env["dreact"].shape[1] <= d:
             return np.zeros(6)
-        return self._wrench[:, index].sum(axis=0)
+        return env["dreact"][:, d].sum(axis=0)
 
-    def _prepare_contact(self) -> None:
-        """Collider tables, per-element contact state and the rod-rod segment tables."""
-        b = self._block
-        E, N = b.Q.shape[0], b.pos.shape[0]
-        # None without colliders: the kernels then compile without any mesh code.
-        self._cols = (col.pack(self._colliders) + query_cache(N + E, len(self._rods))
-                      if self._colliders else None)
-        if getattr(self, "_col_anchor", None) is None or self._col_anchor.shape[0] != N + E:
-            # Friction anchors of nodes, then elements (collider frame) and their colliders.
-            self._col_anchor = np.zeros((N + E, 4))
-            self._col_anchor_id = np.full(N + E, -1, dtype=np.int64)
-            self._el_K = np.zeros((E, 3, 3, 3))
-        self._col_pen = np.zeros((N, len(self._colliders)))
-        self._wrench = np.zeros((len(self._rods), len(self._colliders), 6))
-        seg_a = np.zeros(E, dtype=np.int64)
-        seg_b = np.zeros(E, dtype=np.int64)
-        seg_rod = np.full(E, -1, dtype=np.int64)
-        seg_k = np.zeros(E, dtype=np.int64)
-        seg_ne = np.zeros(E, dtype=np.int64)
-        seg_closed = np.zeros(E, dtype=np.bool_)
-        excluded = np.ones(E, dtype=np.int64)
-        seg_radius = np.zeros(E)
-        nodes = []
-        for i, rod in enumerate(self._rods):
-            n0, e0, ne = int(b.rod_node0[i]), int(b.rod_elem0[i]), rod.n_elements
-            k = np.arange(ne)
-            e = e0 + k
-            seg_a[e] = n0 + k
-            seg_b[e] = np.where(k + 1 < rod.n_nodes, n0 + k + 1, n0)
-            seg_rod[e] = i
-            seg_k[e] = k
-            seg_ne[e] = ne
-            seg_closed[e] = rod.closed
-            radius = np.maximum(rod.node_radius[k], rod.node_radius[(k + 1) % rod.n_nodes])
-            seg_radius[e] = radius
-            # Pairs closer along the rod than a half turn of the tightest fold are left out:
-            # they overlap in the straight rest shape when the radius exceeds the element.
-            excluded[e] = 1 + int(math.floor(math.pi * radius.max() / rod.rest_lengths.min()))
-            nodes.extend(range(n0, n0 + rod.n_nodes))
-        self._segs = np.flatnonzero(seg_rod >= 0).astype(np.int64)
-        self._nodes = np.array(nodes, dtype=np.int64)
-        self._skin = 2.0 * float(seg_radius.max()) if E else 0.0
-        self._ref = np.zeros((N, 3))
-        self._xp = np.zeros((N, 3))
-        self._vp = np.zeros((N, 3))
-        self._extra = np.zeros((N, 3))
-        self._pair_state[:] = 0
-        self._seg_tables = (seg_a, seg_b, seg_rod, seg_k, seg_ne, seg_closed, excluded,
-                            seg_radius)
+    def _driver_impulse(self, d: int) -> np.ndarray:
+        env = self._env
+        out = self._imp_base[d].copy()
+        if env is not None and env["dimp"].shape[1] > d:
+            out += env["dimp"][:, d].sum(axis=0)
+        return out
 
-    # ------------------------------------------------------------------ stepping
-    def _sync_constraints(self) -> None:
-        pn, pd, fe, fq, fd = [], [], [], [], []
-        rod_pcon, rod_fcon = [0], [0]
-        for i, rod in enumerate(self._rods):
-            n0 = self._block.rod_node0[i]
-            e0 = self._block.rod_elem0[i]
-            for c in rod._clamps:
-                pn.append(n0 + c.node)
-                pd.append([*c._pos0, *c._vel, c._t0])
-                if c._Q0 is not None:
-                    fe.append(e0 + c.element)
-                    fq.append(c._Q0)
-                    fd.append([*c._omega, c._t0])
-            rod_pcon.append(len(pn))
-            rod_fcon.append(len(fe))
-        self._rod_pcon = np.array(rod_pcon, dtype=np.int64)
-        self._rod_fcon = np.array(rod_fcon, dtype=np.int64)
-        self._pcon_node = np.array(pn, dtype=np.int64)
-        self._pcon_data = np.array(pd, dtype=np.float64).reshape(-1, 7)
-        self._fcon_elem = np.array(fe, dtype=np.int64)
-        self._fcon_Q0 = np.array(fq, dtype=np.float64).reshape(-1, 3, 3)
-        self._fcon_data = np.array(fd, dtype=np.float64).reshape(-1, 4)
+    def _reset_impulse(self, d: int) -> None:
+        self._imp_base[d] = 0.0
+        if self._env is not None and self._env["dimp"].shape[1] > d:
+            self._env["dimp"][:, d] = 0.0
 
-    def _prepare(self) -> None:
-        """Rebuild what the kernel needs after rods, clamps, colliders, dt or damping changed."""
-        self._sync_constraints()
-        self._prepare_contact()
-        b = self._block
-        n_rods = len(self._rods)
-        decay = np.array([math.exp(-r.damping * self._dt) for r in self._rods])
-        self._status = np.zeros((n_rods, 3), dtype=np.int64)
-        self._times = np.empty(n_rods)
-        self._groups = _balanced_groups(b.rod_ne, self.threads)
-        common = (
-            self._rod_pcon, self._rod_fcon,
-            b.pos, b.vel, b.mass, b.node_radius, b.node_kmin, b.fext, b.force, b.contact_force)
+    def set_drivers(self, drivers: Sequence[Driver], position: np.ndarray | None = None,
+                    rotation: np.ndarray | None = None, velocity: np.ndarray | None = None,
+                    angular_velocity: np.ndarray | None = None,
+                    acceleration: np.ndarray | None = None,
+                    angular_acceleration: np.ndarray | None = None) -> None:
+        """Set many drivers at once (array form of their setters): each given array has one
+        row per driver, (n, 3) or (n, 3, 3) for ``rotation`` (world from local), world frame."""
+        index = np.array([d._driver for d in drivers], dtype=np.int64)
+        if np.any(index < 0) or any(d._world is not self for d in drivers):
+            raise ValueError("drivers: every driver must belong to this world")
+        n = index.shape[0]
+        for name, value, col0, width in (("position", position, D_P, 3),
+                                         ("rotation", rotation, D_R, 9),
+                                         ("velocity", velocity, D_V, 3),
+                                         ("angular_velocity", angular_velocity, D_W, 3),
+                                         ("acceleration", acceleration, D_A, 3),
+                                         ("angular_acceleration", angular_acceleration, D_AL, 3)):
+            if value is None:
+                continue
+            arr = np.asarray(value, dtype=np.float64).reshape(n, -1)
+            if arr.shape != (n, width) or not np.all(np.isfinite(arr)):
+                raise ValueError(f"{name} must be finite with shape ({n}, "
+                                 f"{'3, 3' if width == 9 else 3}), got {np.shape(value)}")
+            if name == "rotation":
+                R = arr.reshape(n, 3, 3)
+                err = np.abs(R @ R.transpose(0, 2, 1) - np.eye(3)).max(initial=0.0)
+                if err > 1e-6 or np.any(np.linalg.det(R) < 0.0):
+                    raise ValueError("rotation must hold rotation matrices (orthonormal, det +1)")
+            self._drv[index, col0:col0 + width] = arr
+
+    def driver_impulses(self, drivers: Sequence[Driver]) -> np.ndarray:
+        """Impulses (n, 6) of many drivers since their last reset (see ``Driver.impulse``)."""
+        return np.array([self._driver_impulse(d._driver) for d in drivers]).reshape(-1, 6)
+
+    # ------------------------------------------------------------------ preparing
+    def _rod_parameters_changed(self) -> None:
+        """Damping or contact group of a rod changed: rewrite them in place."""
+        if self._rods_p is not None:
+            set_damping(self._rods_p, self._rods, self._dt)
+            self._rods_p["group"][:] = [r.contact_group for r in self._rods]
+            self._check_damping()
+
+    def _check_damping(self) -> None:
         if self.integrator == "verlet":
             viscous = [i for i, r in enumerate(self._rods) if r.internal_damping > 0.0]
             if viscous:
                 raise ValueError(f"internal_damping: rod {viscous[0]} sets it, but it needs "
                                  "integrator='stable' (explicit steps cannot afford it)")
-            decay = np.array([math.exp(-r.damping * self._dt) for r in self._rods])
-            self._kernel = verlet.advance_rods
-            head = (
-                b.rod_node0, b.rod_elem0, b.rod_vor0, b.rod_ne, b.rod_closed, decay, *common,
-                b.Q, b.omega, b.J, b.inv_J, b.S, b.rest_len, b.rest_sigma, b.text, b.torque,
-                b.dil, b.stress, b.B, b.rest_vor, b.rest_kappa, b.kappa, b.couple,
-                b.scr_C, b.scr_X, b.scr_edot,
-                self._pcon_node, self._pcon_data, self._fcon_elem, self._fcon_Q0, self._fcon_data,
-                self._planes_arr)
-            tail = self._contact_args()
+
+    def _prepare(self) -> None:
+        """Rebuild the buffers after rods, clamps, planes, colliders or dt changed."""
+        if self._stale_rods:
+            self._rods_p = pack_rods(self._rods, self._dt)
+            self._stale_rods = False
+        self._check_damping()
+        set_damping(self._rods_p, self._rods, self._dt)
+        rp = self._rods_p
+        R = len(self._rods)
+        N, E = rp["pos"].shape[0], rp["Q"].shape[0]
+        D = self._drv.shape[0]
+        # Impulses accumulated so far survive the rebuild.
+        if self._env is not None:
+            dimp = self._env["dimp"]
+            self._imp_base[: dimp.shape[1]] += dimp.sum(axis=0)
+        pn, fe = [], []
+        rod_pcon, rod_fcon = [0], [0]
+        for i, rod in enumerate(self._rods):
+            n0, e0 = int(rp["node0"][i]), int(rp["elem0"][i])
+            for c in rod._clamps:
+                pn.append((n0 + c.node, c._driver))
+                if c.element is not None:
+                    fe.append((e0 + c.element, c._driver))
+            rod_pcon.append(len(pn))
+            rod_fcon.append(len(fe))
+        env = Packed("env", dict(R=R, R1=R + 1, P=len(pn), F=len(fe), L=len(self._planes), D=D))
+        env["rod_pcon"][:] = rod_pcon
+        env["rod_fcon"][:] = rod_fcon
+        if pn:
+            env["pcon_node"][:], env["pcon_drv"][:] = np.array(pn).T
+        if fe:
+            env["fcon_elem"][:], env["fcon_drv"][:] = np.array(fe).T
+        env["fcon_rel"][:] = np.eye(3)
+        if self._planes:
+            env["planes"][:] = np.array(self._planes)
+        self._env = env
+        old = self._cols_p
+        if self._colliders:
+            allowed = np.ones((R, len(self._colliders)), dtype=np.int64)
+            for r, c in self._ignored:
+                allowed[r, c] = 0
+            self._cols_p = col.pack(self._colliders, R, N, N + E, allowed)
+            self._cols_p["drv"][:] = [c._driver for c in self._colliders]
+            if old is not None:  # same rods and colliders: keep anchors and query caches
+                try:
+                    self._cols_p.set_state(old.state())
+                except ValueError:
+                    pass
         else:
-            rates = np.array([r.damping for r in self._rods])
-            retardation = np.array([r.internal_damping for r in self._rods])
-            self._kernel = implicit.advance_rods_implicit
-            head = (
-                b.rod_node0, b.rod_elem0, b.rod_vor0, b.rod_ne, b.rod_closed, rates, retardation,
-                *common,
-                b.Q, b.omega, b.J, b.S, b.rest_len, b.rest_sigma, b.text, b.torque,
-                b.dil, b.stress, b.B, b.rest_vor, b.rest_kappa, b.kappa, b.couple,
-                b.scr_C, b.scr_X, b.scr_edot,
-                self._pcon_node, self._pcon_data, self._fcon_elem, self._fcon_Q0, self._fcon_data,
-                self._planes_arr)
-            tail = (b.xn, b.vn, b.Qn, b.wn, b.fn_el, b.tn_el, b.anchor, b.anchor_on, b.c_plane,
-                    b.c_stick, b.c_dir, b.stats, b.h_prev, b.rate, *self._contact_args())
-        # The one-rod kernel's arguments after (r, n_steps, t, dt, gravity, max_strain[,
-        # iterations, tolerance]) and before the rod-rod contact ones.
-        self._rod_args = (*head, self._status, *tail)
-        self._dirty = False
+            self._cols_p = None
+        sim = self._sim
+        sim[SIM_DT] = self._dt
+        sim[SIM_RR:SIM_RR + 3] = self._rod_contact_params
+        sim[SIM_SKIN] = 2.0 * float(rp["seg_radius"].max()) if E else 0.0
+        coupled = self.rod_contact and rp["segs"].shape[0] > 1
+        self._groups = [(0, R)] if coupled else balanced_groups(rp["ne"], self.threads)
+        self._opts = []
+        for r0, r1 in self._groups:
+            opts = np.zeros(OPT_LEN, dtype=np.int64)
+            opts[OPT_ITER] = self.iterations
+            opts[OPT_COUPLED] = int(coupled)
+            opts[OPT_LOAD] = 1
+            opts[OPT_STORE] = int(len(self._groups) == 1)
+            opts[OPT_R0], opts[OPT_R1] = r0, r1
+            self._opts.append(opts)
+        cp = self._cols_p
+        self._bufs = (rp.F, rp.I, env.F, env.I, None if cp is None else cp.F,
+                      None if cp is None else cp.I)
+        self._kernel = step.step_verlet if self.integrator == "verlet" else step.step_stable
+        self._stale_env = False
 
-    def _contact_args(self) -> tuple:
-        return (self._cols, self._col_anchor, self._col_anchor_id, self._col_pen, self._el_K,
-                self._wrench)
-
-    def _coupled(self) -> bool:
-        """Rods step together (one step at a time) when they may touch each other or
-        themselves."""
-        return self.rod_contact and self._segs.shape[0] > 1
-
-    def _advance(self, n_steps: int, args: tuple) -> None:
-        """Run the kernel: rods in parallel groups, or all together with rod-rod contact."""
-        b = self._block
-        n_rods = len(self._rods)
-        seg = self._seg_tables
-        if self._coupled():
-            last = self._extra if self.integrator == "verlet" else self._vp
-            contact = (self._segs, *seg, self._nodes, self._pairs, self._pair_state, self._ref,
-                       self._skin, self._rod_contact_params, last, self._xp)
-            if self.integrator == "verlet":
-                self._pairs = coupled.advance_world_verlet(
-                    n_steps, self.time, self._dt, self.gravity, self.max_strain, n_rods,
-                    self._rod_args, b.pos, b.vel, b.mass, b.node_kmin, self._status, self._times,
-                    contact)
-            else:
-                self._pairs = coupled.advance_world_implicit(
-                    n_steps, self.time, self._dt, self.gravity, self.max_strain,
-                    self.iterations, self.tolerance, n_rods, self._rod_args, b.pos, b.vel,
-                    self._status, self._times, contact)
-            return
-        if self.integrator == "verlet":
-            extra = (self._extra, False)
-        else:
-            seg_a, seg_b, seg_rod, _, _, _, _, seg_radius = seg
-            extra = (self._pairs, 0, seg_a, seg_b, seg_rod, seg_radius, self._xp, self._vp,
-                     self._rod_contact_params)
-        work = n_steps * int(b.rod_ne.sum())
-        if len(self._groups) > 1 and work >= _MIN_THREADED_WORK:
-            futures = [_pool(len(self._groups)).submit(self._kernel, r0, r1, *args, self._times,
-                                                       self._rod_args, *extra)
-                       for r0, r1 in self._groups]
-            for f in futures:
-                f.result()
-        else:
-            self._kernel(0, n_rods, *args, self._times, self._rod_args, *extra)
-
+    # ------------------------------------------------------------------ stepping
     def step(self, n_steps: int = 1) -> None:
         """Advance ``n_steps`` time steps (one kernel call for all rods and steps)."""
-        n_steps = check.integer_at_least("n_steps", n_steps, 0)
-        if n_steps == 0:
-            return
-        if self._block is None:
-            self.time += n_steps * self._dt
-            return
-        if self._dirty:
+        if type(n_steps) is not int or n_steps < 1:
+            n_steps = check.integer_at_least("n_steps", n_steps, 0)
+            if n_steps == 0:
+                return
+        if self._stale_env or self._stale_rods:
+            if not self._rods:
+                advance_drivers(self._drv, n_steps, self._dt)
+                self.time += n_steps * self._dt
+                return
             self._prepare()
-        status, times = self._status, self._times
-        status[:] = 0
-        for c in self._colliders:  # poses and velocities may have changed since the last step
-            self._cols[1][c.index] = c._pose
-            self._cols[2][c.index] = c._twist
-        args = (n_steps, self.time, self._dt, self.gravity, self.max_strain)
-        if self.integrator == "stable":
-            args += (self.iterations, self.tolerance)
-        self._advance(n_steps, args)
-        failed = np.flatnonzero(status[:, 0] != verlet.OK)
-        if failed.size:
-            # Report the rod that failed first; the world's state is not usable afterwards.
-            r = int(failed[np.argmin(status[failed, 2])])
-            self.time = float(self.time + (int(status[r, 2]) + 0.5) * self._dt)
-            self._raise_diverged(int(status[r, 0]), r, int(status[r, 1]))
-        self.time = float(times[0])
+        self._sim[SIM_T] = self.time
+        if len(self._groups) == 1:
+            t, bad, self._pairs = self._kernel(n_steps, self._sim, self._opts[0], *self._bufs,
+                                               self._drv, self._pairs)
+        else:
+            t, bad = self._advance_threaded(n_steps)
+        if bad >= 0:
+            self._raise_diverged(bad)
+        self.time = t
 
-    def _raise_diverged(self, code: int, r: int, k: int) -> None:
+    def _advance_threaded(self, n_steps: int) -> tuple[float, int]:
+        """Groups of rods on threads (each with its own copy of the drivers)."""
+        work = n_steps * int(self._rods_p["ne"].sum())
+        if work >= MIN_THREADED_WORK:
+            futures = [pool(len(self._groups)).submit(self._kernel, n_steps, self._sim, opts,
+                                                      *self._bufs, self._drv, self._pairs)
+                       for opts in self._opts]
+            results = [f.result() for f in futures]
+        else:
+            results = [self._kernel(n_steps, self._sim, opts, *self._bufs, self._drv,
+                                    self._pairs) for opts in self._opts]
+        self._drv[:] = self._env["dloc"][0]
+        status = self._rods_p["status"]
+        failed = [res[1] for res in results if res[1] >= 0]
+        bad = min(failed, key=lambda r: status[r, 2]) if failed else -1
+        return results[0][0], bad
+
+    def _raise_diverged(self, r: int) -> None:
+        status = self._rods_p["status"]
+        code, k, steps = (int(x) for x in status[r])
+        # Report the rod that failed first; the world's state is not usable afterwards.
+        self.time = float(self.time + (steps + 0.5) * self._dt)
         # The explicit limit means nothing to the stable integrator, which has already tried
         # dt/64 sub-steps: suggest a smaller step of the same kind.
         suggested = min(rod.stable_dt() for rod in self._rods)
@@ -442,38 +490,83 @@ class World:
                                  reason=_REASONS.get(code, "unknown"), dt=self._dt)
 
     def run(self, duration: float, progress: bool = False,
-            recorder: "Recorder | None" = None) -> None:
-        """Advance by ``duration`` s (rounded to whole steps), sampling ``recorder`` on the way.
+            recorder: "Recorder | None" = None, callbacks: Sequence[Any] = ()) -> None:
+        """Advance by ``duration`` s (rounded to whole steps).
 
-        ``progress=True`` shows a progress bar (useful for long runs).
+        ``callbacks``: callables with an ``every`` attribute (s), called with the world at the
+        start and every ``every`` s of simulated time (a :class:`~deformx.Recorder` is one, and
+        so is ``recorder``). ``progress=True`` shows a progress bar (useful for long runs).
         """
-        duration = check.non_negative("duration", duration, "s")
-        n_total = int(round(duration / self._dt))
-        # Chunks bound the Python overhead; recorder samples fall on chunk ends.
-        chunk = max(1, min(n_total, 2000))
-        if recorder is not None:
-            chunk = max(1, min(chunk, int(round(recorder.every / self._dt))))
-            if not recorder.times:
-                recorder.sample()
-        bar = None
-        if progress:
-            from rich.progress import Progress
-            bar = Progress(transient=True)
-            bar.start()
-            task = bar.add_task(f"simulating {duration:g} s", total=n_total)
+        running.run(self, duration, progress=progress, recorder=recorder, callbacks=callbacks)
+
+    @property
+    def arrays(self) -> dict[str, np.ndarray]:
+        """Named views of every packed array (rods, then environment and colliders; a
+        collider field clashing with a rod field is prefixed ``cols_``): for diagnostics and
+        tests. Writing into them changes the simulation."""
+        self._ready()
+        out = dict(self._rods_p.fields)
+        for packed in (self._env, self._cols_p):
+            if packed is not None:
+                for k, v in packed.fields.items():
+                    out[k if k not in out else f"cols_{k}"] = v
+        out["pairs"] = self._pairs
+        out["drivers"] = self._drv
+        return out
+
+    # ------------------------------------------------------------------ state
+    def _ready(self) -> None:
+        if not self._rods:
+            raise ValueError("the world has no rods yet")
+        if self._stale_env or self._stale_rods:
+            self._prepare()
+
+    def get_state(self) -> WorldState:
+        """A copy of everything the next step depends on: time, the rods' state and solver
+        memory, friction anchors and contact sets, mesh query caches, rod-rod pairs and the
+        drivers (numpy arrays; picklable). :meth:`set_state` restores it bit for bit."""
+        self._ready()
+        cp = self._cols_p
+        return WorldState(time=self.time, rods=self._rods_p.state(),
+                          cols=None if cp is None else cp.state(), drivers=self._drv.copy(),
+                          pairs=self._pairs.copy())
+
+    def set_state(self, state: WorldState) -> None:
+        """Restore a :meth:`get_state` snapshot of this world (same rods, clamps, colliders)."""
+        if not isinstance(state, WorldState):
+            raise ValueError(f"state must be a WorldState from get_state(), got {type(state).__name__}")
+        self._ready()
+        if state.drivers.shape != self._drv.shape or (state.cols is None) != (self._cols_p is None):
+            raise ValueError("state: it was taken from a world with other drivers or colliders")
+        self._rods_p.set_state(state.rods)
+        if self._cols_p is not None:
+            self._cols_p.set_state(state.cols)
+        self._drv[:] = state.drivers
+        self._pairs = state.pairs.copy()
+        self.time = float(state.time)
+
+    def _rod_state(self, rod: Rod) -> dict:
+        self._ready()
+        sl = rod_slices(self._rods_p, rod._index, rod)
+        out = {"rods": take_rod(self._rods_p, "rods", sl),
+               "drivers": {c.node: self._drv[c._driver].copy() for c in rod._clamps}}
+        if self._cols_p is not None:
+            out["cols"] = take_rod(self._cols_p, "cols", sl)
+        return out
+
+    def _set_rod_state(self, rod: Rod, state: dict) -> None:
+        self._ready()
+        sl = rod_slices(self._rods_p, rod._index, rod)
         try:
-            done = 0
-            while done < n_total:
-                n = min(chunk, n_total - done)
-                self.step(n)
-                done += n
-                if recorder is not None and recorder.due():
-                    recorder.sample()
-                if bar is not None:
-                    bar.update(task, completed=done)
-        finally:
-            if bar is not None:
-                bar.stop()
+            put_rod(self._rods_p, "rods", sl, state["rods"])
+            if self._cols_p is not None and "cols" in state:
+                put_rod(self._cols_p, "cols", sl, state["cols"])
+        except (KeyError, ValueError, TypeError) as err:
+            raise ValueError(f"state: not a get_state() of this rod ({err})") from None
+        for c in rod._clamps:
+            if c.node in state.get("drivers", {}):
+                self._drv[c._driver] = state["drivers"][c.node]
+        self._rods_p["pair_state"][1] = 0  # positions jumped: rebuild the rod-rod pair list
 
     # ------------------------------------------------------------------ diagnostics
     def energy(self) -> dict[str, float]:
@@ -492,10 +585,10 @@ class World:
         mean iterations per step, (sub-)steps that hit the iteration cap, the last relative
         update (update size / element length, compare with ``tolerance``) and how often a
         step had to be halved because Newton did not converge (``halvings``)."""
-        if self.integrator != "stable" or self._block is None:
+        if self.integrator != "stable" or self._rods_p is None:
             return {"steps": 0, "mean_iterations": 0.0, "capped_steps": 0, "last_update": 0.0,
                     "halvings": 0}
-        st = self._block.stats
+        st = self._rods_p["stats"]
         return {"steps": int(st[:, 0].max()),
                 "mean_iterations": float(st[:, 1].sum() / max(st[:, 0].sum(), 1)),
                 "capped_steps": int(st[:, 2].sum()),
@@ -505,12 +598,15 @@ class World:
     def contact_forces(self, rod: Rod) -> np.ndarray:
         """Contact forces (n_nodes, 3), N, on ``rod``'s nodes in the last step: planes,
         colliders and other rods (and itself)."""
-        return self._block.contact_force[self._block.node_slice(rod._index, rod)].copy()
+        n0 = int(self._rods_p["node0"][rod._index])
+        return self._rods_p["contact_force"][n0:n0 + rod.n_nodes].copy()
 
     def contact_stats(self) -> dict[str, int]:
         """Rod-rod contact: candidate pairs in the current Verlet list, pairs touching in the
         last explicit step, and how often the list was rebuilt."""
-        st = self._pair_state
+        if self._rods_p is None:
+            return {"candidate_pairs": 0, "touching_pairs": 0, "pair_list_builds": 0}
+        st = self._rods_p["pair_state"]
         return {"candidate_pairs": int(st[0]), "touching_pairs": int(st[3]),
                 "pair_list_builds": int(st[2])}
 

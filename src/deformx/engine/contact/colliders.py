@@ -14,7 +14,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from .. import validation as check
+from ..drivers import Driver, pose_from, rotation, vec3
 from ..geometry.bvh import bvh_from_mesh, pseudonormals
+from ..kernels.bundles import D_P, D_V, D_W
+from ..packing import Packed
 from ..geometry.faces import face_frames
 from .primitives import BOX, CAPSULE, CYLINDER, SPHERE
 from .segments import (
@@ -69,7 +72,7 @@ def pose_matrix(pose: Any, name: str = "pose") -> np.ndarray:
     if isinstance(pose, (tuple, list)) and len(pose) == 2:
         T = np.eye(4)
         T[:3, 3] = check.vector3(f"{name} position", pose[0])
-        T[:3, :3] = _rotation(pose[1], f"{name} rotation")
+        T[:3, :3] = rotation(f"{name} rotation", pose[1])
         return T
     arr = np.asarray(pose, dtype=np.float64)
     if arr.shape == (3,):
@@ -80,58 +83,64 @@ def pose_matrix(pose: Any, name: str = "pose") -> np.ndarray:
         raise ValueError(f"{name} must be a finite 4x4 matrix, a (position, rotation) pair or a "
                          f"position, got shape {arr.shape}")
     T = arr.copy()
-    T[:3, :3] = _rotation(arr[:3, :3], f"{name} rotation")
+    T[:3, :3] = rotation(f"{name} rotation", arr[:3, :3])
     T[3] = (0.0, 0.0, 0.0, 1.0)
     return T
 
 
-def _rotation(R: Any, name: str) -> np.ndarray:
-    R = np.asarray(R, dtype=np.float64)
-    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
-        raise ValueError(f"{name} must be a finite 3x3 rotation matrix")
-    if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0.0:
-        raise ValueError(f"{name} must be a rotation matrix (orthonormal, det +1)")
-    return R
-
-
-class Collider:
-    """A mesh or primitive in the world. ``pose`` (4x4, world from local) and the velocity
-    (``set_velocity``) may be changed between steps; ``force`` (N) and ``torque`` (N m, about
-    the collider's origin), world frame, are the rods' reaction on it during the last step."""
+class Collider(Driver):
+    """A mesh or primitive in the world, moved by its kinematic driver: ``pose`` (4x4, world
+    from local), velocity and acceleration may be set between steps and are integrated inside
+    ``step(n)`` (see :mod:`deformx.engine.drivers`); ``force`` (N) and ``torque`` (N m, about
+    the collider's origin), world frame, are the rods' load on it during the last step."""
 
     def __init__(self, world, index: int, kind: str, pose: np.ndarray, params: np.ndarray,
                  mesh: tuple[np.ndarray, np.ndarray] | None = None) -> None:
-        self._world = world
+        super().__init__()
         self.index = index
         self.kind = kind
-        self._pose = pose
-        self._twist = np.zeros(6)
+        self._own[D_P:D_P + 3] = pose[:3, 3]
+        self._set_rotation(pose[:3, :3])
         self._params = params
         self._mesh = mesh
 
     @property
     def pose(self) -> np.ndarray:
-        """World-from-local transform (4x4); assign a new one to move the collider."""
-        return self._pose.copy()
+        """World-from-local transform (4x4) now; assign a new one to move the collider."""
+        T = np.eye(4)
+        T[:3, :3] = self.rotation
+        T[:3, 3] = self.position
+        return T
 
     @pose.setter
     def pose(self, value: Any) -> None:
-        self._pose[:] = pose_matrix(value)
+        T = pose_matrix(value)
+        self._row[D_P:D_P + 3] = T[:3, 3]
+        self._set_rotation(T[:3, :3])
 
     def set_pose(self, position: Sequence[float] | None = None,
                  rotation: np.ndarray | None = None) -> None:
-        """Move the collider: ``position`` (m) of its origin and/or ``rotation`` (3x3)."""
-        if position is not None:
-            self._pose[:3, 3] = check.vector3("position", position)
-        if rotation is not None:
-            self._pose[:3, :3] = _rotation(rotation, "rotation")
+        """Move the collider now: ``position`` (m) of its origin and/or ``rotation`` (3x3,
+        world from local)."""
+        p, R = pose_from(position, rotation)
+        if p is not None:
+            self._row[D_P:D_P + 3] = p
+        if R is not None:
+            self._set_rotation(R)
 
-    def set_velocity(self, linear: Sequence[float] = (0.0, 0.0, 0.0),
-                     angular: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+    def set_velocity(self, linear: Sequence[float] | None = (0.0, 0.0, 0.0),
+                     angular: Sequence[float] | None = (0.0, 0.0, 0.0), *,
+                     velocity: Sequence[float] | None = None,
+                     angular_velocity: Sequence[float] | None = None) -> None:
         """Velocity of the collider's origin (m/s) and angular velocity (rad/s), world frame,
-        used for contact damping and friction (the pose is not advanced by the world)."""
-        self._twist[:3] = check.vector3("linear", linear)
-        self._twist[3:] = check.vector3("angular", angular)
+        from now on (``velocity`` / ``angular_velocity`` are the same as for clamps)."""
+        linear = linear if velocity is None else velocity
+        angular = angular if angular_velocity is None else angular_velocity
+        row = self._row
+        if linear is not None:
+            row[D_V:D_V + 3] = vec3("linear", linear)
+        if angular is not None:
+            row[D_W:D_W + 3] = vec3("angular", angular)
 
     @property
     def vertices(self) -> np.ndarray | None:
@@ -142,19 +151,9 @@ class Collider:
     def faces(self) -> np.ndarray | None:
         return None if self._mesh is None else self._mesh[1]
 
-    @property
-    def force(self) -> np.ndarray:
-        """Total contact force (N, world) of all rods on this collider in the last step."""
-        return self._world._collider_wrench(self.index)[:3]
-
-    @property
-    def torque(self) -> np.ndarray:
-        """Total contact torque (N m, world) about the collider's origin in the last step."""
-        return self._world._collider_wrench(self.index)[3:]
-
     def __repr__(self) -> str:
         extra = "" if self._mesh is None else f", {self._mesh[1].shape[0]} triangles"
-        return f"Collider({self.kind}{extra}, position={self._pose[:3, 3].round(4).tolist()})"
+        return f"Collider({self.kind}{extra}, position={self.position.round(4).tolist()})"
 
 
 def contact_params(stiffness: float | None, damping: float | None, friction: float | None,
@@ -200,20 +199,19 @@ def shape_params(par: np.ndarray, values: Sequence[float]) -> np.ndarray:
     return par
 
 
-def pack(colliders: Sequence[Collider]) -> tuple:
-    """The kernels' collider tables (see :mod:`deformx.engine.contact.segments`).
+def pack(colliders: Sequence[Collider], n_rods: int, n_nodes: int, n_slots: int,
+         allowed: np.ndarray) -> Packed:
+    """The kernels' collider tables (the ``cols`` group; see ``kernels/bundles.py``).
 
     Meshes are concatenated with global indices: collider c owns vertices, faces and BVH nodes
     ``rng[c, 0]:rng[c, 1]``, ``rng[c, 2]:rng[c, 3]`` and ``rng[c, 4]:rng[c, 5]`` (its root is
     node ``rng[c, 4]``), and its faces, child links, leaf slots and triangle ids point into
-    the packed arrays."""
+    the packed arrays. ``allowed`` (rods x colliders) says which rod may touch which."""
     C = len(colliders)
-    kind = np.array([KINDS[c.kind] for c in colliders], dtype=np.int64)
-    pose = np.array([c._pose for c in colliders]).reshape(C, 4, 4)
-    twist = np.array([c._twist for c in colliders]).reshape(C, 6)
-    par = np.array([c._params for c in colliders]).reshape(C, N_PAR)
     rng = np.zeros((C, 6), dtype=np.int64)
-    MV, MF, lo, hi, left, right, start, count, order, Fn, En, Vn, Fg = ([] for _ in range(13))
+    parts: dict[str, list] = {k: [] for k in ("MV", "MF", "Blo", "Bhi", "Bleft", "Bright",
+                                              "Bstart", "Bcount", "Border", "Fn", "En", "Vn",
+                                              "Fg")}
     nv = nf = nb = 0
     for i, c in enumerate(colliders):
         if c._mesh is None:
@@ -225,27 +223,30 @@ def pack(colliders: Sequence[Collider]) -> tuple:
         rng[i] = (nv, nv + V.shape[0], nf, nf + F.shape[0], nb, nb + bvh.lo.shape[0])
         # Indices become global (vertex, face and BVH node ids of the packed tables), so the
         # kernels index them without per-query views; the mesh's root is node nb.
-        MV.append(V)
-        MF.append(F + nv)
-        for lst, arr in ((lo, bvh.lo), (hi, bvh.hi),
-                         (left, np.where(bvh.left >= 0, bvh.left + nb, -1)),
-                         (right, np.where(bvh.right >= 0, bvh.right + nb, -1)),
-                         (start, bvh.start + nf), (count, bvh.count), (order, bvh.order + nf),
-                         (Fn, fn), (En, en), (Vn, vn), (Fg, c._frames)):
-            lst.append(arr)
+        for key, arr in (("MV", V), ("MF", F + nv), ("Blo", bvh.lo), ("Bhi", bvh.hi),
+                         ("Bleft", np.where(bvh.left >= 0, bvh.left + nb, -1)),
+                         ("Bright", np.where(bvh.right >= 0, bvh.right + nb, -1)),
+                         ("Bstart", bvh.start + nf), ("Bcount", bvh.count),
+                         ("Border", bvh.order + nf), ("Fn", fn), ("En", en), ("Vn", vn),
+                         ("Fg", c._frames)):
+            parts[key].append(arr)
         nv += V.shape[0]
         nf += F.shape[0]
         nb += bvh.lo.shape[0]
-
-    def cat(parts, shape, dtype=np.float64):
-        return np.ascontiguousarray(np.concatenate(parts) if parts else np.zeros(shape, dtype),
-                                    dtype=dtype)
-
-    i64 = np.int64
-    return (kind, pose, twist, par, rng, cat(MV, (0, 3)), cat(MF, (0, 3), i64), cat(lo, (0, 3)),
-            cat(hi, (0, 3)), cat(left, (0,), i64), cat(right, (0,), i64), cat(start, (0,), i64),
-            cat(count, (0,), i64), cat(order, (0,), i64), cat(Fn, (0, 3)), cat(En, (0, 3, 3)),
-            cat(Vn, (0, 3)), cat(Fg, (0, 3, 4)))
+    b = Packed("cols", dict(C=C, R=n_rods, N=n_nodes, Q=n_slots, nv=nv, nf=nf, nb=nb))
+    b["kind"][:] = [KINDS[c.kind] for c in colliders]
+    b["par"][:] = np.array([c._params for c in colliders]).reshape(C, N_PAR)
+    b["rng"][:] = rng
+    b["allowed"][:] = allowed
+    for key, arrs in parts.items():
+        if arrs:
+            b[key][...] = np.concatenate(arrs)
+    # Empty query caches (see ``segments._mesh_nearest``): no collider, no triangles, no
+    # flat patch, no hints; no friction anchors.
+    b["qc_meta"][:] = -1
+    b["qc_meta"][:, 1] = 0
+    b["anchor_id"][:] = -1
+    return b
 
 
 def prepare_mesh(collider: Collider) -> None:

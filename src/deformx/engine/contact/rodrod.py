@@ -55,9 +55,9 @@ def argsort_heap(key):
 
 @njit(cache=True, error_model="numpy")
 def build_pairs(segs, seg_a, seg_b, seg_rod, seg_k, seg_ne, seg_closed, excluded, radius, pos,
-                pos2, skin, pairs):
+                pos2, skin, pairs, rod_group):
     """Candidate pairs among the segments ``segs`` whose padded boxes overlap at ``pos`` or
-    ``pos2``.
+    ``pos2``; rods of different contact groups (``rod_group``) never pair.
 
     Segment (element) e joins nodes ``seg_a[e]``, ``seg_b[e]`` of rod ``seg_rod[e]`` (local
     index ``seg_k[e]`` of ``seg_ne[e]`` elements, closed or not). Returns (pairs, count) with
@@ -103,6 +103,8 @@ def build_pairs(segs, seg_a, seg_b, seg_rod, seg_k, seg_ne, seg_closed, excluded
                 break
             if (lo[qj, 0] > hi[qi, 0] or lo[qi, 0] > hi[qj, 0] or lo[qj, 1] > hi[qi, 1]
                     or lo[qi, 1] > hi[qj, 1] or lo[qj, 2] > hi[qi, 2] or lo[qi, 2] > hi[qj, 2]):
+                continue
+            if rod_group[seg_rod[i]] != rod_group[seg_rod[j]]:
                 continue
             if seg_rod[i] == seg_rod[j]:
                 gap = abs(seg_k[i] - seg_k[j])

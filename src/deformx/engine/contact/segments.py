@@ -18,9 +18,9 @@ Every force is also summed, with opposite sign, into the collider's wrench (forc
 its origin, world frame). For the stable integrator the kernel also returns the contact
 stiffness per element as three 3x3 blocks (node a-a, b-a, b-b).
 
-Collider tables (see :mod:`deformx.engine.contact.colliders`):
-``kind (C,)``, ``pose (C, 4, 4)`` world-from-local, ``twist (C, 6)`` (linear velocity of the
-origin, angular velocity; world frame), ``par (C, 12)`` (stiffness, damping, mu_s, mu_k, auto,
+Collider tables (the ``Colliders`` bundle of :mod:`deformx.engine.kernels.bundles`):
+``kind (C,)``, per rod ``pose (R, C, 4, 4)`` world-from-local and ``twist (R, C, 6)`` (linear
+velocity of the origin, angular velocity; world frame) as that rod sees them now, ``par (C, 12)`` (stiffness, damping, mu_s, mu_k, auto,
 two_sided, repulsion, shape parameters x3, unused x2), the packed meshes and the per-query
 caches of nearby triangles (see ``_mesh_nearest``).
 """
@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..geometry.bvh import TRAVERSAL_STACK, closest_segment_search, nearest_k_search, signed_side
+from ..geometry.bvh import closest_segment_search, nearest_k_search, signed_side
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from ..kernels.refcount import NO_REFCOUNT
 from .primitives import segment_deepest, shape_sdf
@@ -42,7 +42,7 @@ MESH = 0
 P_K, P_C, P_MUS, P_MUK, P_AUTO, P_TWO_SIDED, P_REPULSION, P_SHAPE = 0, 1, 2, 3, 4, 5, 6, 7
 N_PAR = 12
 QUERY_CACHE = 32  # nearest triangles kept per query
-# Query cache columns (see ``query_cache``): integers, then floats.
+# Query cache columns (``qc_meta`` integers, ``qc_geo`` floats; see kernels/bundles.py).
 Q_COL, Q_N, Q_FLAT, Q_HINT = 0, 1, 2, 3
 Q_FAR = 6
 _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment crosses a face)
@@ -158,7 +158,7 @@ def _moved(qc_geo, slot, la, lb) -> float:
 def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, Fg, la,
                   lb, reach, skin, two_sided, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound):
     """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache;
-    ``stack``, ``bound``: BVH traversal scratch (the rod's row of ``query_cache``'s).
+    ``stack``, ``bound``: BVH traversal scratch (the rod's rows of ``tr_stack``, ``tr_bound``).
 
     The cache holds the triangles nearest to where the slot's segment was when it was filled,
     sorted by their exact distance then, and a horizon that no other triangle comes closer
@@ -444,8 +444,7 @@ def _add_K(el_K, e, q, w, kn, kt, n):
 
 @njit(cache=True, error_model="numpy")
 def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, node_radius,
-                          node_kmin, cols, anchor, anchor_col, pen, el_K, wrench, force,
-                          contact_force, commit, want_K) -> int:
+                          node_kmin, cols, el_K, force, contact_force, commit, want_K) -> int:
     """Add the contact forces of rod ``r`` with every collider; returns the contact count.
 
     Two kinds of contact, so that a lying rope is supported evenly and a thin edge between two
@@ -462,8 +461,15 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     b-a, b-b); ``commit`` stores the friction anchors (once per accepted step). ``pen`` (N, C)
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
-    (kind, pose, twist, par, mesh_rng, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount,
-     Border, Fn, En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, tr_stack, tr_bound) = cols
+    kind, par, mesh_rng, allowed = cols.kind, cols.par, cols.rng, cols.allowed
+    # Poses and velocities of the colliders as this rod sees them now (see drivers).
+    pose, twist = cols.pose[r], cols.twist[r]
+    MV, MF, Blo, Bhi, Bleft, Bright = cols.MV, cols.MF, cols.Blo, cols.Bhi, cols.Bleft, cols.Bright
+    Bstart, Bcount, Border, Fn, En, Vn = (cols.Bstart, cols.Bcount, cols.Border, cols.Fn,
+                                          cols.En, cols.Vn)
+    Fg, qc_meta, qc_geo, qc_tris, qc_dist = cols.Fg, cols.qc_meta, cols.qc_geo, cols.qc_tris, cols.qc_dist
+    anchor, anchor_col, pen, wrench = cols.anchor, cols.anchor_id, cols.pen, cols.wrench
+    tr_stack, tr_bound = cols.tr_stack, cols.tr_bound
     n_col = kind.shape[0]
     n_nodes = pos.shape[0]
     # The rod's own BVH traversal scratch: nothing here allocates (see NO_REFCOUNT), and rods
@@ -482,6 +488,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         anchored = False
         for c in range(n_col):
             pen[i, c] = -1e30
+            if allowed[r, c] == 0:
+                continue
             done = False
             if kind[c] == MESH and qc_meta[i, Q_FLAT] >= 0:
                 # The flat-patch shortcut (see _mesh_nearest), written out here: a function
@@ -559,6 +567,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         slot = n_nodes + e  # element queries and anchors follow the nodes
         anchored = False
         for c in range(n_col):
+            if allowed[r, c] == 0:
+                continue
             if kind[c] == MESH and qc_meta[slot, Q_FLAT] >= 0:
                 # Flat patch: nothing beyond what the ends carry when the segment lies on its
                 # outer side (either side of an open mesh) with both ends over it or beyond
@@ -641,16 +651,3 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
         if commit and not anchored:
             anchor_col[slot] = -1
     return count
-
-
-def query_cache(n_slots: int, n_rods: int) -> tuple:
-    """Empty mesh query caches for ``n_slots`` queries (nodes, then elements; see
-    ``_mesh_nearest``): per query the integers (collider (-1: none), count, the flat patch's
-    face (-1: not flat), and per end the cache entry whose face held it last (-1: none)), the
-    floats (the segment's ends when filled (m), the horizon (m)), the nearest triangles and
-    their distances then (m); and per rod a BVH traversal stack (node ids, squared gaps)."""
-    meta = np.full((n_slots, 5), -1, dtype=np.int64)
-    meta[:, Q_N] = 0
-    return (meta, np.zeros((n_slots, 7)), np.zeros((n_slots, QUERY_CACHE), dtype=np.int64),
-            np.zeros((n_slots, QUERY_CACHE)), np.zeros((n_rods, TRAVERSAL_STACK), dtype=np.int64),
-            np.zeros((n_rods, TRAVERSAL_STACK)))

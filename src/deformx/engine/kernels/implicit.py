@@ -33,7 +33,20 @@ from ..contact.segments import rod_collider_contacts
 from .banded import BLOCK_BAND, add_lower, block_cholesky, block_solve, store_block
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
-from .verlet import OK, _check, _constrain_values
+from .bundles import OPT_ITER, SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_RR, SIM_TOL
+from .drivers import (
+    add_frame_reaction,
+    add_impulse,
+    add_node_reaction,
+    begin_step,
+    clamp_rates,
+    clamp_values,
+    clear_reactions,
+    collider_impulses,
+    collider_poses,
+    end_step,
+)
+from .verlet import OK, _check
 
 NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-steps
 # per rod: steps, Newton iterations, sub-steps at the iteration cap, last relative update,
@@ -350,8 +363,8 @@ def _contacts(phase, n0, nn, h, planes, pos, xn, mass, node_radius, node_kmin, a
 
 @njit(cache=True, error_model="numpy")
 def _more_contacts(r, n0, nn, e0, ne, h, pos, vel, xn, mass, node_radius, node_kmin, cols,
-                   col_anchor, col_anchor_id, col_pen, el_K, wrench, pairs, n_pairs, seg_a, seg_b, seg_rod,
-                   seg_radius, xp, vp, rr, force, contact_force, clear, commit):
+                   el_K, pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr, force,
+                   contact_force, clear, commit):
     """Mesh, primitive and rod-rod contact forces of the iterate, and their stiffness.
 
     ``clear`` zeroes ``contact_force`` first (when no plane pass has written it); ``commit``
@@ -370,8 +383,7 @@ def _more_contacts(r, n0, nn, e0, ne, h, pos, vel, xn, mass, node_radius, node_k
     dt_ref = min(h, 1e-4)
     if cols is not None:
         rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, xn, mass, node_radius,
-                              node_kmin, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, force,
-                              contact_force, commit, True)
+                              node_kmin, cols, el_K, force, contact_force, commit, True)
     if n_pairs > 0:
         rod_pair_forces(r, pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, pos, vel, xp, vp,
                         mass, node_kmin, dt_ref, h, rr, force, contact_force, el_K, True)
@@ -412,18 +424,7 @@ def _implied_rates(n0, nn, e0, ne, inv_h, pos, xn, Q, Qn, vel, omega):
 
 
 @njit(cache=True, error_model="numpy")
-def advance_rod_implicit(
-    r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
-    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_nu, rod_tau, rod_pcon, rod_fcon,
-    pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
-    Q, omega, J, S, rest_len, rest_sigma, text, torque, dil, stress,
-    B, rest_vor, rest_kappa, kappa, couple,
-    scr_C, scr_X, scr_edot,
-    pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, xn, vn, Qn, wn, fn_el, tn_el, anchor, anchor_on, c_plane, c_stick, c_dir, stats, h_prev, rate,
-    cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
-    pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr,
-):
+def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl, pairs, n_pairs):
     """Advance rod ``r`` by ``n_steps`` backward-Euler steps of ``dt``; returns the new time.
 
     ``rod_nu`` is the uniform damping rate (1/s), ``rod_tau`` the Kelvin-Voigt retardation
@@ -431,12 +432,32 @@ def advance_rod_implicit(
 
     Contact with meshes and primitives (``cols``) and rod-rod contact (the candidate ``pairs``;
     other rods at their predicted positions ``xp``) enter each Newton iteration through force
-    and stiffness (``el_K``: per element, node blocks a-a, b-a, b-b).
+    and stiffness (``el_K``: per element, node blocks a-a, b-a, b-b). Bundles as for the
+    explicit ``advance_rod``; ``dl`` the drivers as this rod sees them (advanced here).
     """
+    dt = sim[SIM_DT]
+    gravity = sim[SIM_G:SIM_G + 3]
+    max_strain, tol, max_iter = sim[SIM_MAX_STRAIN], sim[SIM_TOL], opts[OPT_ITER]
+    rr = sim[SIM_RR:SIM_RR + 3]
+    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed = md.node0, md.elem0, md.vor0, md.ne, md.closed
+    rod_nu, rod_tau = md.nu, md.tau
+    pos, vel, Q, omega = st.pos, st.vel, st.Q, st.omega
+    xn, vn, Qn, wn, fn_el, tn_el = st.xn, st.vn, st.Qn, st.wn, st.fn_el, st.tn_el
+    anchor, anchor_on, c_plane, c_stick, c_dir = st.anchor, st.anchor_on, st.c_plane, st.c_stick, st.c_dir
+    h_prev, rate = st.h_prev, st.rate
+    mass, node_radius, node_kmin, J, S = md.mass, md.node_radius, md.node_kmin, md.J, md.S
+    rest_len, rest_sigma, B, rest_vor, rest_kappa = md.rest_len, md.rest_sigma, md.B, md.rest_vor, md.rest_kappa
+    seg_a, seg_b, seg_rod, seg_radius = md.seg_a, md.seg_b, md.seg_rod, md.seg_radius
+    fext, text = ct.fext, ct.text
+    force, contact_force, torque, dil, stress = wk.force, wk.contact_force, wk.torque, wk.dil, wk.stress
+    kappa, couple, scr_C, scr_X, scr_edot = wk.kappa, wk.couple, wk.scr_C, wk.scr_X, wk.scr_edot
+    el_K, xp, vp, stats, status = wk.el_K, wk.xp, wk.vp, wk.stats, wk.status
+    planes = env.planes
     h = dt
     n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
-    c0, c1 = rod_pcon[r], rod_pcon[r + 1]
-    f0, f1 = rod_fcon[r], rod_fcon[r + 1]
+    c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
+    f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
+    clamped = c1 > c0 or f1 > f0
     nu = rod_nu[r]
     tau = rod_tau[r]
     nb = 2 * ne + (0 if closed else 1)
@@ -447,7 +468,7 @@ def advance_rod_implicit(
     has_planes = planes.shape[0] > 0
     n_cols = 0
     if cols is not None:  # None without colliders (the branch is pruned at compile time)
-        n_cols = cols[0].shape[0]
+        n_cols = cols.kind.shape[0]
     own_pairs = 0
     for p in range(n_pairs):
         if seg_rod[pairs[p, 0]] == r or seg_rod[pairs[p, 1]] == r:
@@ -457,9 +478,9 @@ def advance_rod_implicit(
     alpha = np.zeros((ne, 3))  # and per element
     # Clamped unknowns: their values are prescribed, so their rows/columns drop out.
     for c in range(c0, c1):
-        fixed[2 * (pcon_node[c] - n0)] = True
+        fixed[2 * (env.pcon_node[c] - n0)] = True
     for c in range(f0, f1):
-        fixed[2 * (fcon_elem[c] - e0) + 1] = True
+        fixed[2 * (env.fcon_elem[c] - e0) + 1] = True
     length_scale = 0.0
     for k in range(ne):
         length_scale += rest_len[e0 + k]
@@ -469,7 +490,11 @@ def advance_rod_implicit(
     hs = h  # current sub-step (halved when Newton fails, back to h at each full step)
     elapsed = 0.0  # time done within the current full step
     last_hs = h_prev[r]  # last accepted sub-step (0: no usable acceleration yet)
+    fresh_step = True  # the drivers' rates of a new full step are still to be set
     while done < n_steps:
+        if fresh_step:
+            begin_step(dl, dt)
+            fresh_step = False
         # Predictor: x + h v + h (v - v_prev), i.e. extrapolating the last step's acceleration
         # (vn still holds the previous step's start velocity): ~0.7 Newton iterations fewer on
         # smooth motion. Contact makes velocities jump and then this misleads Newton, so a rod
@@ -479,14 +504,15 @@ def advance_rod_implicit(
             if anchor_on[i] != 0:
                 touching = True
                 break
-        for i in range(n0, n0 + nn):  # colliders: node anchors, then element anchors
-            if col_anchor_id[i] >= 0:
-                touching = True
-                break
-        for e in range(e0, e0 + ne):
-            if col_anchor_id[pos.shape[0] + e] >= 0:
-                touching = True
-                break
+        if cols is not None:  # colliders: node anchors, then element anchors
+            for i in range(n0, n0 + nn):
+                if cols.anchor_id[i] >= 0:
+                    touching = True
+                    break
+            for e in range(e0, e0 + ne):
+                if cols.anchor_id[pos.shape[0] + e] >= 0:
+                    touching = True
+                    break
         extrapolate = 0.0 if last_hs != hs else (hs if touching else 1.0)
         for i in range(n0, n0 + nn):
             for d in range(3):
@@ -520,7 +546,9 @@ def advance_rod_implicit(
             rotate_directors(Q, e, hs, omega[e, 0] + alpha[e - e0, 0], omega[e, 1] + alpha[e - e0, 1],
                              omega[e, 2] + alpha[e - e0, 2])
         t_new = t + hs
-        _constrain_values(t_new, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data)
+        clamp_values(elapsed + hs, c0, c1, f0, f1, pos, Q, env, dl)
+        if cols is not None:
+            collider_poses(r, elapsed + hs, cols, dl)
         if has_planes:
             _contacts(PREDICT, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
                       anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)
@@ -560,7 +588,7 @@ def advance_rod_implicit(
                           anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, True)
             if more_contacts:
                 _more_contacts(r, n0, nn, e0, ne, hs, pos, vel, xn, mass, node_radius, node_kmin,
-                               cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, pairs, n_pairs,
+                               cols, el_K, pairs, n_pairs,
                                seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr, force,
                                contact_force, not has_planes, False)
             # Residual (negated): forces minus inertia and damping.
@@ -574,6 +602,8 @@ def advance_rod_implicit(
                 for d in range(3):
                     rhs[2 * k + 1, d] = (torque[e, d] + text[e, d] - J[e, d] * inv_dil * (
                         (omega[e, d] - wn[e, d]) * inv_hs + nu * omega[e, d]))
+            if clamped:  # what the clamps hold is the residual of their rows
+                _clamp_reactions(r, elapsed + hs, n0, e0, c0, c1, f0, f1, pos, Q, rhs, env, dl)
             for q in range(nb):
                 if fixed[q]:
                     rhs[q, 0] = 0.0
@@ -689,17 +719,14 @@ def advance_rod_implicit(
                       anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)
         if more_contacts:
             _more_contacts(r, n0, nn, e0, ne, hs, pos, vel, xn, mass, node_radius, node_kmin,
-                           cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, pairs, n_pairs,
+                           cols, el_K, pairs, n_pairs,
                            seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr, force,
                            contact_force, not has_planes, True)
-        for c in range(c0, c1):
-            for d in range(3):
-                vel[pcon_node[c], d] = pcon_data[c, 3 + d]
-        for c in range(f0, f1):
-            e = fcon_elem[c]
-            for d in range(3):
-                omega[e, d] = (Q[e, d, 0] * fcon_data[c, 0] + Q[e, d, 1] * fcon_data[c, 1]
-                               + Q[e, d, 2] * fcon_data[c, 2])
+        if cols is not None:
+            collider_impulses(r, hs, cols, env)
+        clamp_rates(elapsed + hs, c0, c1, f0, f1, pos, vel, Q, omega, env, dl)
+        if clamped:
+            add_impulse(r, hs, c0, c1, f0, f1, env)
         t = t_new
         last_hs = hs
         stats[r, 1] += it
@@ -709,6 +736,8 @@ def advance_rod_implicit(
         elapsed += hs
         if elapsed >= h * (1.0 - 1e-9):
             done += 1
+            end_step(dl, dt)
+            fresh_step = True
             stats[r, 0] += 1
             elapsed = 0.0
             if hs != h:
@@ -719,15 +748,30 @@ def advance_rod_implicit(
     return t
 
 
-@njit(cache=True, nogil=True, error_model="numpy")
-def advance_rods_implicit(r_begin, r_end, n_steps, t, dt, gravity, max_strain, max_iter, tol,
-                          times, rod_args, pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius,
-                          xp, vp, rr):
-    """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods.
+@njit(cache=True, error_model="numpy")
+def _clamp_reactions(r, tau, n0, e0, c0, c1, f0, f1, pos, Q, rhs, env, dl) -> None:
+    """The load of rod ``r`` on its clamps' drivers: the residual (forces minus inertia) of
+    the clamped rows, which the prescribed motion takes up."""
+    clear_reactions(r, c0, c1, f0, f1, env)
+    for c in range(c0, c1):
+        i = env.pcon_node[c]
+        q = 2 * (i - n0)
+        add_node_reaction(r, env.pcon_drv[c], tau, pos[i, 0], pos[i, 1], pos[i, 2], rhs[q, 0],
+                          rhs[q, 1], rhs[q, 2], env, dl)
+    for c in range(f0, f1):
+        e = env.fcon_elem[c]
+        q = 2 * (e - e0) + 1
+        add_frame_reaction(r, env.fcon_drv[c], Q, e, rhs[q, 0], rhs[q, 1], rhs[q, 2], env)
 
-    ``rod_args`` are :func:`advance_rod_implicit`'s arguments between ``tol`` and ``pairs``.
-    """
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, st, md, ct, wk, env, cols, drv,
+                          load, pairs, n_pairs):
+    """Advance rods ``r_begin .. r_end - 1``, each with its own copy of the drivers (loaded
+    from ``drv`` first when ``load``); releases the GIL so threads can share rods."""
     for r in range(r_begin, r_end):
-        times[r] = advance_rod_implicit(r, n_steps, t, dt, gravity, max_strain, max_iter, tol,
-                                        *rod_args, pairs, n_pairs, seg_a, seg_b, seg_rod,
-                                        seg_radius, xp, vp, rr)
+        dl = env.dloc[r]
+        if load:
+            dl[:, :] = drv
+        wk.times[r] = advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols,
+                                           dl, pairs, n_pairs)

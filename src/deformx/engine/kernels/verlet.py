@@ -15,7 +15,22 @@ from numba import njit
 
 from ..contact.plane import plane_contact_node, plane_penalty
 from ..contact.segments import rod_collider_contacts
+from .bundles import D_W, SIM_DT, SIM_G, SIM_MAX_STRAIN
 from .cosserat import rod_extent, rod_internal_loads
+from .drivers import (
+    add_frame_reaction,
+    add_impulse,
+    add_node_reaction,
+    begin_step,
+    clamp_rate,
+    clamp_rates,
+    clamp_values,
+    clear_reactions,
+    collider_impulses,
+    collider_poses,
+    end_step,
+    pose_at,
+)
 from .refcount import NO_REFCOUNT
 from .so3 import rotate_directors
 
@@ -31,43 +46,6 @@ def _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h):
             pos[i, j] += h * vel[i, j]
     for e in range(e0, e0 + ne):
         rotate_directors(Q, e, h, omega[e, 0], omega[e, 1], omega[e, 2])
-
-
-@njit(cache=True, error_model="numpy")
-def _constrain_values(t, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data):
-    """Clamped nodes/frames follow their pose, extrapolated at constant velocity from t0."""
-    for c in range(c0, c1):
-        tau = t - pcon_data[c, 6]
-        i = pcon_node[c]
-        for j in range(3):
-            pos[i, j] = pcon_data[c, j] + tau * pcon_data[c, 3 + j]
-    for c in range(f0, f1):
-        e = fcon_elem[c]
-        tau = t - fcon_data[c, 3]
-        for a in range(3):
-            for b in range(3):
-                Q[e, a, b] = fcon_Q0[c, a, b]
-        # Lab angular velocity -> material frame of Q0, then rotate by tau.
-        w0 = fcon_data[c, 0]
-        w1 = fcon_data[c, 1]
-        w2 = fcon_data[c, 2]
-        rotate_directors(Q, e, tau, Q[e, 0, 0] * w0 + Q[e, 0, 1] * w1 + Q[e, 0, 2] * w2,
-                         Q[e, 1, 0] * w0 + Q[e, 1, 1] * w1 + Q[e, 1, 2] * w2,
-                         Q[e, 2, 0] * w0 + Q[e, 2, 1] * w1 + Q[e, 2, 2] * w2)
-
-
-@njit(cache=True, error_model="numpy")
-def _constrain_rates(c0, c1, f0, f1, vel, Q, omega, pcon_node, pcon_data, fcon_elem, fcon_data):
-    """Clamped nodes/frames take their prescribed velocity (angular: lab -> material)."""
-    for c in range(c0, c1):
-        i = pcon_node[c]
-        for j in range(3):
-            vel[i, j] = pcon_data[c, 3 + j]
-    for c in range(f0, f1):
-        e = fcon_elem[c]
-        for j in range(3):
-            omega[e, j] = (Q[e, j, 0] * fcon_data[c, 0] + Q[e, j, 1] * fcon_data[c, 1]
-                           + Q[e, j, 2] * fcon_data[c, 2])
 
 
 @njit(cache=True, error_model="numpy")
@@ -89,52 +67,56 @@ def _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain):
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def advance_rod(
-    r, n_steps, t, dt, gravity, max_strain,
-    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed, rod_decay, rod_pcon, rod_fcon,
-    pos, vel, mass, node_radius, node_kmin, fext, force, contact_force,
-    Q, omega, J, inv_J, S, rest_len, rest_sigma, text, torque, dil, stress,
-    B, rest_vor, rest_kappa, kappa, couple,
-    scr_C, scr_X, scr_edot,
-    pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data,
-    planes, status, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench, extra, use_extra,
-    start_mid, end_mid,
-):
+def advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, use_extra, start_mid,
+                end_mid):
     """Advance rod ``r`` by ``n_steps`` steps from time ``t``; returns the new time.
 
-    Contact: ``planes``, the colliders ``cols`` (meshes, primitives; friction anchors in
-    ``col_anchor*``, reactions into ``wrench[r]``) and, with ``use_extra``, the node forces
-    ``extra`` (rod-rod contact, computed by the caller at this step's mid-point).
-    On divergence stops with ``status[r]`` = (code, element, steps done).
+    ``st``, ``md``, ``ct``, ``wk``: the rods' state, model, control and work bundles; ``env``
+    clamps, planes and driver reactions; ``cols`` the colliders (None without any); ``dl``
+    the drivers as this rod sees them (advanced here, step by step). Contact: planes,
+    colliders (friction anchors in ``cols``, reactions into ``cols.wrench[r]``) and, with
+    ``use_extra``, the node forces ``wk.extra`` (rod-rod contact, computed by the caller at
+    this step's mid-point). On divergence stops with ``wk.status[r]`` = (code, element,
+    steps done).
 
     A caller stepping one step at a time (rod-rod contact) may leave the rod at the next
-    step's mid-point (``end_mid``: positions and frames at ``t + h``) and start from there
-    (``start_mid``): the two half drifts between steps become one, as within a call.
+    step's mid-point (``end_mid``: positions and frames at ``t + h``, drivers' rates already
+    those of the next step) and start from there (``start_mid``): the two half drifts
+    between steps become one, as within a call.
     """
+    dt = sim[SIM_DT]
     h = 0.5 * dt
-    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
-    c0, c1 = rod_pcon[r], rod_pcon[r + 1]
-    f0, f1 = rod_fcon[r], rod_fcon[r + 1]
-    decay = rod_decay[r]
-    g0, g1, g2 = gravity[0], gravity[1], gravity[2]
+    pos, vel, Q, omega = st.pos, st.vel, st.Q, st.omega
+    mass, node_radius, node_kmin = md.mass, md.node_radius, md.node_kmin
+    force, contact_force, torque, dil = wk.force, wk.contact_force, wk.torque, wk.dil
+    fext, text, inv_J = ct.fext, ct.text, md.inv_J
+    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, md.node0, md.elem0, md.vor0, md.ne, md.closed)
+    c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
+    f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
+    decay = md.decay[r]
+    g0, g1, g2 = sim[SIM_G], sim[SIM_G + 1], sim[SIM_G + 2]
+    planes = env.planes
     n_planes = planes.shape[0]
     # ``cols`` is None without colliders: numba then prunes the collider branch at compile
     # time, which keeps the mesh code (and its compile time) out of plain worlds.
     n_cols = 0
     if cols is not None:
-        n_cols = cols[0].shape[0]
+        n_cols = cols.kind.shape[0]
     touching = n_planes > 0 or n_cols > 0 or use_extra
+    clamped = c1 > c0 or f1 > f0
 
     if not start_mid:
         _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h)
     for step in range(n_steps):
+        if step > 0 or not start_mid:
+            begin_step(dl, dt)
         t += h
-        _constrain_values(t, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data, fcon_elem, fcon_Q0, fcon_data)
+        clamp_values(h, c0, c1, f0, f1, pos, Q, env, dl)
 
-        rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
-                           pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
-                           rest_kappa, force, torque, dil, kappa, stress, couple,
-                           scr_C, scr_X, scr_edot)
+        rod_internal_loads(r, md.node0, md.elem0, md.vor0, md.ne, md.closed,
+                           pos, vel, Q, omega, md.J, md.S, md.rest_len, md.rest_sigma, md.B,
+                           md.rest_vor, md.rest_kappa, force, torque, dil, wk.kappa, wk.stress,
+                           wk.couple, wk.scr_C, wk.scr_X, wk.scr_edot)
         for i in range(n0, n0 + nn):
             force[i, 0] += mass[i] * g0 + fext[i, 0]
             force[i, 1] += mass[i] * g1 + fext[i, 1]
@@ -150,22 +132,26 @@ def advance_rod(
                 _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt,
                                 contact_force)
             if cols is not None:
+                collider_poses(r, h, cols, dl)
                 rod_collider_contacts(r, n0, nn, e0, ne, dt, dt, pos, vel, pos, mass, node_radius,
-                                      node_kmin, cols, col_anchor, col_anchor_id, col_pen, el_K, wrench,
-                                      force, contact_force, True, False)
+                                      node_kmin, cols, wk.el_K, force, contact_force, True, False)
+                collider_impulses(r, dt, cols, env)
             if use_extra:
+                extra = wk.extra
                 for i in range(n0, n0 + nn):
                     for j in range(3):
                         force[i, j] += extra[i, j]
                         contact_force[i, j] += extra[i, j]
 
-        code, k = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
+        code, k = _check(e0, ne, v0, nv, dil, wk.kappa, md.rest_vor, torque, sim[SIM_MAX_STRAIN])
         if code != OK:
-            status[r, 0] = code
-            status[r, 1] = k
-            status[r, 2] = step
+            wk.status[r, 0] = code
+            wk.status[r, 1] = k
+            wk.status[r, 2] = step
             return t
 
+        if clamped:
+            _clamp_reactions(r, h, dt, c0, c1, f0, f1, st, md, wk, env, dl)
         for i in range(n0, n0 + nn):
             inv_m = 1.0 / mass[i]
             for j in range(3):
@@ -173,7 +159,7 @@ def advance_rod(
         for e in range(e0, e0 + ne):
             for j in range(3):
                 omega[e, j] += dt * (inv_J[e, j] * torque[e, j] * dil[e])
-        _constrain_rates(c0, c1, f0, f1, vel, Q, omega, pcon_node, pcon_data, fcon_elem, fcon_data)
+        clamp_rates(h, c0, c1, f0, f1, pos, vel, Q, omega, env, dl)
         if decay != 1.0:
             for i in range(n0, n0 + nn):
                 for j in range(3):
@@ -186,11 +172,51 @@ def advance_rod(
             _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, dt)
         else:
             _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h)
+        end_step(dl, dt)
         t += h
-    _constrain_values(t + h if end_mid else t, c0, c1, f0, f1, pos, Q, pcon_node, pcon_data,
-                      fcon_elem, fcon_Q0, fcon_data)
-    status[r, 2] = n_steps
+    if end_mid:
+        begin_step(dl, dt)
+        clamp_values(h, c0, c1, f0, f1, pos, Q, env, dl)
+    else:
+        clamp_values(0.0, c0, c1, f0, f1, pos, Q, env, dl)
+    wk.status[r, 2] = n_steps
     return t
+
+
+@njit(cache=True, error_model="numpy")
+def _clamp_reactions(r, tau, dt, c0, c1, f0, f1, st, md, wk, env, dl) -> None:
+    """What the rod puts on its clamps' drivers this step: the total load on each clamped
+    node and frame minus the part the clamp's prescribed motion uses up (explicit step:
+    the constraint turns the free velocity update into the prescribed one)."""
+    pos, vel, Q, omega = st.pos, st.vel, st.Q, st.omega
+    clear_reactions(r, c0, c1, f0, f1, env)
+    inv_dt = 1.0 / dt
+    for c in range(c0, c1):
+        i = env.pcon_node[c]
+        d = env.pcon_drv[c]
+        p, _ = pose_at(dl, d, tau)
+        v = clamp_rate(dl, d, pos[i, 0] - p[0], pos[i, 1] - p[1], pos[i, 2] - p[2])
+        m = md.mass[i]
+        add_node_reaction(r, d, tau, pos[i, 0], pos[i, 1], pos[i, 2],
+                          wk.force[i, 0] - m * (v[0] - vel[i, 0]) * inv_dt,
+                          wk.force[i, 1] - m * (v[1] - vel[i, 1]) * inv_dt,
+                          wk.force[i, 2] - m * (v[2] - vel[i, 2]) * inv_dt, env, dl)
+    for c in range(f0, f1):
+        e = env.fcon_elem[c]
+        d = env.fcon_drv[c]
+        t0 = _frame_load(Q, e, 0, dl, d, omega, md.J, wk.torque, wk.dil, inv_dt)
+        t1 = _frame_load(Q, e, 1, dl, d, omega, md.J, wk.torque, wk.dil, inv_dt)
+        t2 = _frame_load(Q, e, 2, dl, d, omega, md.J, wk.torque, wk.dil, inv_dt)
+        add_frame_reaction(r, d, Q, e, t0, t1, t2, env)
+    add_impulse(r, dt, c0, c1, f0, f1, env)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _frame_load(Q, e, j, dl, d, omega, J, torque, dil, inv_dt) -> float:
+    """Material component j of the torque on clamped element e beyond what its prescribed
+    spin uses up."""
+    w = Q[e, j, 0] * dl[d, D_W] + Q[e, j, 1] * dl[d, D_W + 1] + Q[e, j, 2] * dl[d, D_W + 2]
+    return torque[e, j] - J[e, j] * (w - omega[e, j]) * inv_dt / dil[e]
 
 
 @njit(cache=True, error_model="numpy")
@@ -218,12 +244,13 @@ def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, forc
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def advance_rods(r_begin, r_end, n_steps, t, dt, gravity, max_strain, times, rod_args, extra,
-                 use_extra):
-    """Advance rods ``r_begin .. r_end - 1``; releases the GIL so threads can share rods.
-
-    ``rod_args`` are :func:`advance_rod`'s arguments between ``max_strain`` and ``extra``.
-    """
+def advance_rods(r_begin, r_end, n_steps, t, sim, st, md, ct, wk, env, cols, drv, load):
+    """Advance rods ``r_begin .. r_end - 1`` independently (no rod-rod contact), each with its
+    own copy of the drivers (loaded from ``drv`` first when ``load``); releases the GIL so
+    threads can share rods."""
     for r in range(r_begin, r_end):
-        times[r] = advance_rod(r, n_steps, t, dt, gravity, max_strain, *rod_args, extra,
-                               use_extra, False, False)
+        dl = env.dloc[r]
+        if load:
+            dl[:, :] = drv
+        wk.times[r] = advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, False,
+                                  False, False)

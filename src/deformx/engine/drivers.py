@@ -1,0 +1,149 @@
+"""Kinematic drivers: the prescribed rigid motions of clamps and colliders (handles).
+
+A driver is a row of the world's driver table (see ``kernels/bundles.py``): the pose of its
+origin (position, rotation world-from-local), its velocity and angular velocity and their
+rates, all in the world frame and at the world's current time. Inside ``step(n)`` every step
+does ``v += a dt, p += v dt; w += alpha dt, R <- Exp(w dt) R`` (semi-implicit Euler, as MuJoCo
+and PhysX integrate a free body). Setting a driver writes its row: it never rebuilds the world,
+so a co-simulation or an RL environment can set every driver every control step.
+
+Every driver reports the load the rods put on it: the last step's ``force`` (N) and ``torque``
+(N m, about its origin), and the ``impulse`` (force and torque integrated over time, N s and
+N m s) since :meth:`Driver.reset_impulse`; world frame.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+
+from . import validation as check
+from .kernels.bundles import D_A, D_AL, D_COLS, D_P, D_R, D_V, D_W
+
+
+def fresh_row() -> np.ndarray:
+    row = np.zeros(D_COLS)
+    row[D_R:D_R + 9] = np.eye(3).ravel()
+    return row
+
+
+def vec3(name: str, value: Any) -> np.ndarray:
+    """A finite 3-vector; fast for tuples and arrays of three floats (called every control
+    step)."""
+    try:
+        x, y, z = value
+        out = np.array((float(x), float(y), float(z)))
+    except (TypeError, ValueError):
+        return check.vector3(name, value)
+    if not (abs(out[0]) < np.inf and abs(out[1]) < np.inf and abs(out[2]) < np.inf):
+        return check.vector3(name, value)  # raises, naming the parameter
+    return out
+
+
+def rotation(name: str, R: Any) -> np.ndarray:
+    """A proper 3x3 rotation matrix, else ``ValueError`` naming ``name``."""
+    R = np.asarray(R, dtype=np.float64)
+    if R.shape != (3, 3) or not np.all(np.isfinite(R)):
+        raise ValueError(f"{name} must be a finite 3x3 rotation matrix")
+    if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0.0:
+        raise ValueError(f"{name} must be a rotation matrix (orthonormal, det +1)")
+    return R
+
+
+class Driver:
+    """A handle on one driver row: owned by the handle until its world registers it."""
+
+    def __init__(self) -> None:
+        self._own = fresh_row()
+        self._world = None
+        self._driver = -1
+
+    @property
+    def _row(self) -> np.ndarray:
+        if self._world is None:
+            return self._own
+        return self._world._drv[self._driver]
+
+    # -------------------------------------------------------------- reading
+    @property
+    def position(self) -> np.ndarray:
+        """Position (m) of the driver's origin now."""
+        return self._row[D_P:D_P + 3].copy()
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """Rotation world-from-local (3x3) now."""
+        return self._row[D_R:D_R + 9].reshape(3, 3).copy()
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """Linear velocity (m/s) of the origin."""
+        return self._row[D_V:D_V + 3].copy()
+
+    @property
+    def angular_velocity(self) -> np.ndarray:
+        """Angular velocity (rad/s, world frame)."""
+        return self._row[D_W:D_W + 3].copy()
+
+    @property
+    def acceleration(self) -> np.ndarray:
+        """Linear acceleration (m/s^2) of the origin."""
+        return self._row[D_A:D_A + 3].copy()
+
+    @property
+    def angular_acceleration(self) -> np.ndarray:
+        """Angular acceleration (rad/s^2, world frame)."""
+        return self._row[D_AL:D_AL + 3].copy()
+
+    @property
+    def force(self) -> np.ndarray:
+        """Force (N, world) the rods put on the driver in the last step."""
+        return self._load()[:3]
+
+    @property
+    def torque(self) -> np.ndarray:
+        """Torque (N m, world) the rods put on the driver about its origin in the last step."""
+        return self._load()[3:]
+
+    @property
+    def impulse(self) -> np.ndarray:
+        """Force and torque integrated over time since :meth:`reset_impulse` (6: N s, N m s;
+        world frame, torque about the driver's origin)."""
+        if self._world is None:
+            return np.zeros(6)
+        return self._world._driver_impulse(self._driver)
+
+    def reset_impulse(self) -> None:
+        """Start accumulating :attr:`impulse` afresh."""
+        if self._world is not None:
+            self._world._reset_impulse(self._driver)
+
+    def _load(self) -> np.ndarray:
+        if self._world is None:
+            return np.zeros(6)
+        return self._world._driver_load(self._driver)
+
+    # -------------------------------------------------------------- setting
+    def _set_rotation(self, R: np.ndarray) -> None:
+        self._row[D_R:D_R + 9] = R.ravel()
+
+    def set_acceleration(self, linear: Sequence[float] | None = (0.0, 0.0, 0.0),
+                         angular: Sequence[float] | None = (0.0, 0.0, 0.0)) -> None:
+        """Linear (m/s^2) and angular (rad/s^2) acceleration from now on, world frame; None
+        leaves one as it is."""
+        row = self._row
+        if linear is not None:
+            row[D_A:D_A + 3] = vec3("linear", linear)
+        if angular is not None:
+            row[D_AL:D_AL + 3] = self._check_spin("angular", vec3("angular", angular))
+
+    def _check_spin(self, name: str, w: np.ndarray) -> np.ndarray:
+        return w
+
+
+def pose_from(position: Any, rotation_: Any) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Validated position and rotation (either may be None)."""
+    p = None if position is None else vec3("position", position)
+    R = None if rotation_ is None else rotation("rotation", rotation_)
+    return p, R

@@ -1,0 +1,79 @@
+"""Entry kernels: one call per ``World.step(n)``, one per integrator.
+
+They take only the world's flat buffers (a numba call costs ~0.1 us per array argument), carve
+them into bundles (:mod:`.bundles`), advance the rods (together when they touch each other,
+else each on its own) and the drivers, and return the new time, the first rod that diverged
+(-1: none) and the rod-rod pair list (grown when it filled up).
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from .bundles import (
+    OPT_COUPLED, OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, SIM_DT, SIM_T, carve_cols, carve_env,
+    carve_rods,
+)
+from .coupled import advance_world_implicit, advance_world_verlet
+from .drivers import begin_step, end_step
+from .implicit import advance_rods_implicit
+from .verlet import OK, advance_rods
+
+
+@njit(cache=True, error_model="numpy")
+def _finish(n_steps, opts, wk, env, drv):
+    """Drivers back from the rods' copies (or advanced alone without rods); the rod that
+    failed first, or -1."""
+    r0, r1 = opts[OPT_R0], opts[OPT_R1]
+    if opts[OPT_STORE]:
+        if r1 > r0:
+            drv[:, :] = env.dloc[r0]
+    bad = -1
+    for r in range(r0, r1):
+        if wk.status[r, 0] != OK and (bad < 0 or wk.status[r, 2] < wk.status[bad, 2]):
+            bad = r
+    return bad
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
+    """``n_steps`` explicit steps; returns (time, failed rod or -1, pairs)."""
+    st, md, ct, wk, = carve_rods(RF, RI)
+    env = carve_env(EF, EI)
+    cols = carve_cols(CF, CI)
+    t = sim[SIM_T]
+    if opts[OPT_COUPLED]:
+        for r in range(md.ne.shape[0]):
+            env.dloc[r][:, :] = drv
+        pairs = advance_world_verlet(n_steps, t, sim, st, md, ct, wk, env, cols, pairs)
+    else:
+        advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, st, md, ct, wk, env, cols, drv,
+                     opts[OPT_LOAD] != 0)
+    bad = _finish(n_steps, opts, wk, env, drv)
+    return wk.times[opts[OPT_R0]], bad, pairs
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
+    """``n_steps`` stable (backward-Euler) steps; returns (time, failed rod or -1, pairs)."""
+    st, md, ct, wk, = carve_rods(RF, RI)
+    env = carve_env(EF, EI)
+    cols = carve_cols(CF, CI)
+    t = sim[SIM_T]
+    if opts[OPT_COUPLED]:
+        for r in range(md.ne.shape[0]):
+            env.dloc[r][:, :] = drv
+        pairs = advance_world_implicit(n_steps, t, sim, opts, st, md, ct, wk, env, cols, pairs)
+    else:
+        advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, opts, st, md, ct, wk,
+                              env, cols, drv, opts[OPT_LOAD] != 0, pairs, 0)
+    bad = _finish(n_steps, opts, wk, env, drv)
+    return wk.times[opts[OPT_R0]], bad, pairs
+
+
+@njit(cache=True, error_model="numpy")
+def advance_drivers(drv, n_steps, dt) -> None:
+    """Drivers of a world without rods: the same recursion as inside the rods' steps."""
+    for _ in range(n_steps):
+        begin_step(drv, dt)
+        end_step(drv, dt)

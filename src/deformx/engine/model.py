@@ -1,0 +1,115 @@
+"""Packing all rods of a world into one ``rods`` buffer group (PyElastica's memory block).
+
+Rods are laid end to end with ghost entries between them (one node, two elements, three Voronoi
+domains), so node, element and Voronoi arrays are plain blocks that flat loops can sweep. Ghost
+nodes have unit mass and ghost elements unit inertia, so whole-block updates leave them at rest.
+The model part (parameters, rest shape, segment tables) is written once here; the rods' state
+and loads move in, and each rod's arrays become views of the buffers.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+
+from .packing import Packed
+
+GHOST_NODES, GHOST_ELEMENTS, GHOST_VORONOI = 1, 2, 3
+CONTACT_STIFFNESS_FLOOR = 1e-3  # automatic plane stiffness >= this times EA / dl
+
+
+def pack_rods(rods: Sequence, dt: float) -> Packed:
+    """The ``rods`` group of ``rods``; their state arrays become views of it."""
+    R = len(rods)
+    nn = [r.n_nodes for r in rods]
+    ne = [r.n_elements for r in rods]
+    nv = [r.rest_voronoi_lengths.shape[0] for r in rods]
+    N = sum(nn) + GHOST_NODES * max(R - 1, 0)
+    E = sum(ne) + GHOST_ELEMENTS * max(R - 1, 0)
+    V = sum(nv) + GHOST_VORONOI * max(R - 1, 0)
+    b = Packed("rods", dict(R=R, N=N, E=E, V=V, S=sum(ne), M=sum(nn)))
+    b["node0"][:] = [sum(nn[:i]) + GHOST_NODES * i for i in range(R)]
+    b["elem0"][:] = [sum(ne[:i]) + GHOST_ELEMENTS * i for i in range(R)]
+    b["vor0"][:] = [sum(nv[:i]) + GHOST_VORONOI * i for i in range(R)]
+    b["ne"][:] = ne
+    b["closed"][:] = [int(r.closed) for r in rods]
+    b["group"][:] = [r.contact_group for r in rods]
+    set_damping(b, rods, dt)
+    b["mass"][:] = 1.0
+    b["Q"][:] = np.eye(3)
+    b["Qn"][:] = np.eye(3)
+    b["J"][:] = 1.0
+    b["inv_J"][:] = 1.0
+    b["rest_len"][:] = 1.0
+    b["rest_vor"][:] = 1.0
+    b["dil"][:] = 1.0
+    b["rate"][:] = 1.0
+    b["c_plane"][:] = -1
+    b["seg_rod"][:] = -1
+    b["excluded"][:] = 1
+    segs, nodes = [], []
+    for i, rod in enumerate(rods):
+        n0, e0, v0 = int(b["node0"][i]), int(b["elem0"][i]), int(b["vor0"][i])
+        n = slice(n0, n0 + nn[i])
+        e = slice(e0, e0 + ne[i])
+        v = slice(v0, v0 + nv[i])
+        b["mass"][n] = rod.masses
+        b["node_radius"][n] = rod.node_radius
+        # Floor of the automatic contact stiffness (N/m): a fraction of the adjacent elements'
+        # axial stiffness, so a stiff rod pressing on a plane does not sink into it.
+        axial = rod._shear_matrix[:, 2] / rod.rest_lengths
+        kmin = np.zeros(nn[i])
+        kmin[: rod.n_elements] = axial
+        kmin[1:] = np.maximum(kmin[1:], axial[: nn[i] - 1])
+        b["node_kmin"][n] = CONTACT_STIFFNESS_FLOOR * kmin
+        b["J"][e] = rod._inertia
+        b["inv_J"][e] = 1.0 / rod._inertia
+        b["S"][e] = rod._shear_matrix
+        b["rest_len"][e] = rod.rest_lengths
+        b["rest_sigma"][e] = rod.rest_sigma
+        b["B"][v] = rod._bend_matrix
+        b["rest_vor"][v] = rod.rest_voronoi_lengths
+        b["rest_kappa"][v] = rod.rest_kappa
+        _segments(b, rod, i, n0, e0)
+        segs.extend(range(e0, e0 + ne[i]))
+        nodes.extend(range(n0, n0 + nn[i]))
+        # Move the state in, then make the rod's arrays views of the buffers.
+        for name, field, sl in (("_positions", "pos", n), ("_velocities", "vel", n),
+                                ("_external_forces", "fext", n), ("_directors", "Q", e),
+                                ("_angular_velocities", "omega", e),
+                                ("_external_torques", "text", e)):
+            b[field][sl] = getattr(rod, name)
+            setattr(rod, name, b[field][sl])
+        # Parameters stay shared too, so edits of rest shape after packing take effect.
+        rod.rest_kappa = b["rest_kappa"][v]
+        rod.rest_sigma = b["rest_sigma"][e]
+    b["segs"][:] = segs
+    b["nodes"][:] = nodes
+    return b
+
+
+def set_damping(b: Packed, rods: Sequence, dt: float) -> None:
+    """Per-rod damping: the explicit step's decay factor, the rate and retardation time."""
+    b["decay"][:] = [math.exp(-r.damping * dt) for r in rods]
+    b["nu"][:] = [r.damping for r in rods]
+    b["tau"][:] = [r.internal_damping for r in rods]
+
+
+def _segments(b: Packed, rod, i: int, n0: int, e0: int) -> None:
+    """Capsule segments of rod ``i`` for rod-rod contact."""
+    ne = rod.n_elements
+    k = np.arange(ne)
+    e = e0 + k
+    b["seg_a"][e] = n0 + k
+    b["seg_b"][e] = np.where(k + 1 < rod.n_nodes, n0 + k + 1, n0)
+    b["seg_rod"][e] = i
+    b["seg_k"][e] = k
+    b["seg_ne"][e] = ne
+    b["seg_closed"][e] = int(rod.closed)
+    radius = np.maximum(rod.node_radius[k], rod.node_radius[(k + 1) % rod.n_nodes])
+    b["seg_radius"][e] = radius
+    # Pairs closer along the rod than a half turn of the tightest fold are left out: they
+    # overlap in the straight rest shape when the radius exceeds the element.
+    b["excluded"][e] = 1 + int(math.floor(math.pi * radius.max() / rod.rest_lengths.min()))
