@@ -193,7 +193,7 @@ def bench(
     """Seconds per step: 1 rod x 100 elements and 64 rods x 50 elements, DeformX vs PyElastica."""
     import numpy as np
 
-    from . import bench as b
+    from .apps import bench as b
 
     with_elastica = elastica and b.elastica_available()
     if steps is not None:
