@@ -65,7 +65,7 @@ def _round_down(x: float) -> float:
 def demo_scene(duration: float = 2.0, out: Path | str = "deformx-demo", video: bool = True):
     """The demo: four ropes of increasing stiffness, clamped horizontally at one end 0.4 m above
     the ground, fall, swing and drape onto the ground plane z = 0."""
-    from .scenes import Material, Output, Plane, Scene, StraightRod, estimate_stable_dt
+    from .apps.scenes import Material, Output, Plane, Scene, StraightRod, estimate_stable_dt
 
     length, n_elements, radius, density, damping = 0.8, 40, 0.005, 1200.0, 1.0
     stiffest = max(e for _, e in DEMO_ROPES)
@@ -131,7 +131,7 @@ def _fail(message: str, code: int = 2) -> None:
 
 def _run_and_report(scene, out: Optional[Path], title: str, progress: bool) -> None:
     from .errors import SimulationDiverged
-    from .scenes import run_scene
+    from .apps.scenes import run_scene
 
     try:
         result = run_scene(scene, progress=progress, out_dir=out, title=title)
@@ -168,7 +168,7 @@ def run(
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
 ) -> None:
     """Run a YAML scene file and write NAME.npz, NAME.png (and NAME.mp4)."""
-    from .scenes import load_scene
+    from .apps.scenes import load_scene
 
     try:
         scene = load_scene(scene_file)

@@ -43,7 +43,7 @@ from pydantic import (
     model_validator,
 )
 
-from .engine.rod import explicit_time_step
+from ..engine.rod import explicit_time_step
 
 __all__ = [
     "Material",
@@ -468,7 +468,7 @@ def run_scene(scene: Scene, progress: bool = True, out_dir: str | Path | None = 
     """
     import deformx as dx
 
-    from . import plotting
+    from .. import plotting
 
     out = Path(out_dir if out_dir is not None else scene.output.directory)
     out.mkdir(parents=True, exist_ok=True)
