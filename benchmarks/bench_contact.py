@@ -31,7 +31,7 @@ from rich.console import Console
 from rich.table import Table
 
 import deformx as dx
-from deformx import bench
+from deformx.apps import bench
 
 DT = 5e-5
 N_EL = 100

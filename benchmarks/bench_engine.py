@@ -20,7 +20,7 @@ import time
 from rich.console import Console
 from rich.table import Table
 
-from deformx import bench
+from deformx.apps import bench
 
 PROBE = r"""
 import time

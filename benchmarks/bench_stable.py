@@ -31,7 +31,7 @@ from rich.console import Console
 from rich.table import Table
 
 import deformx
-from deformx import bench
+from deformx.apps import bench
 
 # Issue targets: PyElastica wall s / sim s divided by ours (stable, dt = 1e-2).
 TARGETS = {"soft": 30.0, "steel": 500.0, "256x20": None}

@@ -10,7 +10,7 @@ solver's convergence report. The explicit integrator would need ~2e-6 s steps he
 import numpy as np
 
 import deformx as dx
-from deformx.plotting import plot_snapshots, rods_from_record
+from deformx.visual.plots import plot_snapshots, rods_from_record
 
 cable = dx.Rod.straight(n_elements=80, start=(0, 0, 0.004), direction=(1, 0, 0), normal=(0, 0, 1),
                         length=0.8, radius=0.004, density=1400.0, youngs_modulus=5e7,

@@ -9,7 +9,7 @@ robot controller would), recording to .npz, and plotting the recording.
 import numpy as np
 
 import deformx as dx
-from deformx.plotting import plot_snapshots, rods_from_record
+from deformx.visual.plots import plot_snapshots, rods_from_record
 
 rope = dx.Rod.straight(n_elements=40, start=(0, 0, 0.005), direction=(1, 0, 0), normal=(0, 0, 1),
                        length=0.8, radius=0.005, density=1200.0, youngs_modulus=5e6, damping=1.0)

@@ -26,7 +26,7 @@ from scipy.spatial import cKDTree
 
 import deformx as dx
 from deformx.engine.geometry.shapes import blob_mesh
-from deformx.plotting import plot_snapshots
+from deformx.visual.plots import plot_snapshots
 
 parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--wrap", default="drape", choices=("drape", "loop"),

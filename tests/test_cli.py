@@ -11,8 +11,8 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
+from deformx.apps.scenes import load_scene, parse_scene
 from deformx.cli import app, demo_scene
-from deformx.scenes import load_scene, parse_scene
 
 runner = CliRunner()
 REPO = Path(__file__).resolve().parents[1]
@@ -202,7 +202,7 @@ def test_version_and_python_dash_m():
 
 def test_scene_with_colliders_runs_and_names_bad_fields(tmp_path):
     """examples/scenes/rope_on_shapes.yaml: a mesh file (relative path), a cylinder, rods."""
-    from deformx.scenes import build_world
+    from deformx.apps.scenes import build_world
 
     scene = load_scene(REPO / "examples" / "scenes" / "rope_on_shapes.yaml")
     world, rods = build_world(scene)

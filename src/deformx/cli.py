@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Optional
 
@@ -65,7 +67,7 @@ def _round_down(x: float) -> float:
 def demo_scene(duration: float = 2.0, out: Path | str = "deformx-demo", video: bool = True):
     """The demo: four ropes of increasing stiffness, clamped horizontally at one end 0.4 m above
     the ground, fall, swing and drape onto the ground plane z = 0."""
-    from .scenes import Material, Output, Plane, Scene, StraightRod, estimate_stable_dt
+    from .apps.scenes import Material, Output, Plane, Scene, StraightRod, estimate_stable_dt
 
     length, n_elements, radius, density, damping = 0.8, 40, 0.005, 1200.0, 1.0
     stiffest = max(e for _, e in DEMO_ROPES)
@@ -129,12 +131,43 @@ def _fail(message: str, code: int = 2) -> None:
     raise typer.Exit(code)
 
 
+COMPILE_MESSAGE = "Compiling numba kernels (first run, cached afterwards)..."
+
+
+@contextmanager
+def _compile_spinner(enabled: bool = True) -> Iterator[None]:
+    """Within the block, one spinner line while numba compiles DeformX's kernels, removed
+    when the compile ends (nothing on warm runs, which load the kernels from the cache)."""
+    if not enabled:
+        yield
+        return
+    from .engine import compile_notice
+
+    shown = []
+
+    def start() -> None:
+        status = console.status(COMPILE_MESSAGE, spinner="dots")
+        shown.append(status)
+        status.start()
+
+    def end(seconds: float = 0.0) -> None:
+        while shown:
+            shown.pop().stop()
+
+    with compile_notice.on_compile(start, end):
+        try:
+            yield
+        finally:
+            end()
+
+
 def _run_and_report(scene, out: Optional[Path], title: str, progress: bool) -> None:
+    from .apps.scenes import run_scene
     from .errors import SimulationDiverged
-    from .scenes import run_scene
 
     try:
-        result = run_scene(scene, progress=progress, out_dir=out, title=title)
+        with _compile_spinner(progress):
+            result = run_scene(scene, progress=progress, out_dir=out, title=title)
     except SimulationDiverged as err:
         _fail(str(err), code=1)
     except ValueError as err:
@@ -147,7 +180,7 @@ def demo(
     out: Path = typer.Option(Path("deformx-demo"), "--out", "-o", help="Output directory."),
     duration: float = typer.Option(2.0, "--duration", "-d", min=1e-6, help="Simulated seconds."),
     video: bool = typer.Option(True, "--video/--no-video", help="Also write demo.mp4."),
-    progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar (and a spinner while kernels compile)."),
 ) -> None:
     """Four ropes of different stiffness fall onto the ground and drape.
 
@@ -165,10 +198,10 @@ def run(
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Output directory (overrides output.directory)."),
     duration: Optional[float] = typer.Option(None, "--duration", "-d", min=1e-9, help="Override the scene duration (s)."),
     video: Optional[bool] = typer.Option(None, "--video/--no-video", help="Override output.video."),
-    progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar (and a spinner while kernels compile)."),
 ) -> None:
     """Run a YAML scene file and write NAME.npz, NAME.png (and NAME.mp4)."""
-    from .scenes import load_scene
+    from .apps.scenes import load_scene
 
     try:
         scene = load_scene(scene_file)
@@ -193,7 +226,7 @@ def bench(
     """Seconds per step: 1 rod x 100 elements and 64 rods x 50 elements, DeformX vs PyElastica."""
     import numpy as np
 
-    from . import bench as b
+    from .apps import bench as b
 
     with_elastica = elastica and b.elastica_available()
     if steps is not None:

@@ -43,7 +43,7 @@ from pydantic import (
     model_validator,
 )
 
-from .engine.rod import explicit_time_step
+from ..engine.rod import explicit_time_step
 
 __all__ = [
     "Material",
@@ -468,7 +468,7 @@ def run_scene(scene: Scene, progress: bool = True, out_dir: str | Path | None = 
     """
     import deformx as dx
 
-    from . import plotting
+    from ..visual import plots
 
     out = Path(out_dir if out_dir is not None else scene.output.directory)
     out.mkdir(parents=True, exist_ok=True)
@@ -501,15 +501,15 @@ def run_scene(scene: Scene, progress: bool = True, out_dir: str | Path | None = 
     if scene.output.plot or scene.output.video:
         with np.load(result["npz"]) as data:
             times = np.asarray(data["time"])
-            positions = plotting.rods_from_record(data)
+            positions = plots.rods_from_record(data)
         labels = [spec.name or f"rod {i}" for i, spec in enumerate(scene.rods)]
         ground = _ground_z(scene)
         if scene.output.plot:
-            result["png"] = plotting.plot_snapshots(times, positions, out / f"{name}.png",
-                                                    title=title or name, ground_z=ground, labels=labels)
-        if scene.output.video:
-            result["mp4"] = plotting.write_video(times, positions, out / f"{name}.mp4",
+            result["png"] = plots.plot_snapshots(times, positions, out / f"{name}.png",
                                                  title=title or name, ground_z=ground, labels=labels)
+        if scene.output.video:
+            result["mp4"] = plots.write_video(times, positions, out / f"{name}.mp4",
+                                              title=title or name, ground_z=ground, labels=labels)
     result.render_time = _time.perf_counter() - t1
     return result
 

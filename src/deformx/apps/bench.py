@@ -5,7 +5,7 @@ scripts and ``deformx bench`` time exactly the same setups. Each case is a set o
 cantilevers (clamped at the start, under gravity, uniformly damped), advanced with the
 explicit position-Verlet integrator at the same ``dt`` in both engines.
 
-    >>> from deformx import bench
+    >>> from deformx.apps import bench
     >>> r = bench.time_deformx(bench.CASES["1x100"], n_steps=2000)
     >>> r.seconds_per_step
 """
@@ -240,7 +240,7 @@ class StabilityResult:
 
 def explicit_dt_estimate(case: BenchCase) -> float:
     """DeformX's conservative explicit step for the case's rods (a start for the search)."""
-    from .engine.rod import explicit_time_step
+    from ..engine.rod import explicit_time_step
 
     shear = case.youngs_modulus / (2.0 * (1.0 + case.poisson_ratio))
     return explicit_time_step(case.length / case.n_elements, case.radius, case.density,
@@ -267,7 +267,7 @@ def stays_bounded_deformx(case: BenchCase, dt: float, duration: float = 1.0, max
     The duration matters: a soft cantilever near its limit runs stably while straight and blows
     up only once it bends (after 0.04 to 0.2 s for E = 1e6 Pa), so 1 s is the default.
     """
-    from .errors import SimulationDiverged
+    from ..errors import SimulationDiverged
 
     one = replace(case, n_rods=1, dt=dt)
     world, rods = build_deformx(one, integrator=integrator)
