@@ -431,7 +431,7 @@ class World:
             opts[OPT_R0], opts[OPT_R1] = r0, r1
             self._opts.append(opts)
         cp = self._cols_p
-        self._bufs = (rp.F, rp.I, env.F, env.I, None if cp is None else cp.F,
+        self._bufs = (*rp.buffers, env.F, env.I, None if cp is None else cp.F,
                       None if cp is None else cp.I)
         self._kernel = step.step_verlet if self.integrator == "verlet" else step.step_stable
         self._stale_env = False

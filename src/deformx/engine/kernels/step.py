@@ -1,6 +1,6 @@
 """Entry kernels: one call per ``World.step(n)``, one per integrator.
 
-They take only the world's flat buffers (a numba call costs ~0.1 us per array argument), carve
+They take only the world's buffers (a numba call costs ~0.1 us per array argument), carve
 them into bundles (:mod:`.bundles`), advance the rods (together when they touch each other,
 else each on its own) and the drivers, and return the new time, the first rod that diverged
 (-1: none) and the rod-rod pair list (grown when it filled up).
@@ -36,9 +36,9 @@ def _finish(n_steps, opts, wk, env, drv):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
+def step_verlet(n_steps, sim, opts, RF, RI, RF3, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` explicit steps; returns (time, failed rod or -1, pairs)."""
-    st, md, ct, wk, = carve_rods(RF, RI)
+    st, md, ct, wk = carve_rods(RF, RI, RF3)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
     t = sim[SIM_T]
@@ -54,9 +54,9 @@ def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
+def step_stable(n_steps, sim, opts, RF, RI, RF3, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` stable (backward-Euler) steps; returns (time, failed rod or -1, pairs)."""
-    st, md, ct, wk, = carve_rods(RF, RI)
+    st, md, ct, wk = carve_rods(RF, RI, RF3)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
     t = sim[SIM_T]
