@@ -116,23 +116,21 @@ def internal_forces_seconds(world: dx.World, repeats: int, calls: int = 20000) -
     """Seconds per call of the internal-force kernel on the world's first rod."""
     from numba import njit
 
+    from deformx.engine.kernels.bundles import carve_rods
     from deformx.engine.kernels.cosserat import rod_internal_loads
 
     @njit(cache=False)
-    def loop(n, args):
+    def loop(n, RF, RI, RF3):
+        st, md, _, wk = carve_rods(RF, RI, RF3)
         for _ in range(n):
-            rod_internal_loads(0, *args)
+            rod_internal_loads(0, st, md, wk)
 
-    b = world.arrays
-    args = tuple(b[k] for k in (
-        "node0", "elem0", "vor0", "ne", "closed", "pos", "vel", "Q", "omega", "J", "S",
-        "rest_len", "rest_sigma", "B", "rest_vor", "rest_kappa", "force", "torque", "dil",
-        "kappa", "stress", "couple", "scr_C", "scr_X", "scr_edot"))
-    loop(10, args)
+    args = world._bufs[:3]  # the rods' buffers
+    loop(10, *args)
 
     def once():
         t0 = time.perf_counter()
-        loop(calls, args)
+        loop(calls, *args)
         return (time.perf_counter() - t0) / calls
     return best_of(once, repeats)
 

@@ -15,3 +15,10 @@ def test_readme_python_example_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     exec(compile(code, "README.md", "exec"), {})
     assert (tmp_path / "cantilever.npz").exists()
+
+
+def test_readme_drivers_example_runs():
+    text = README.read_text()
+    section = text[text.index("Clamps and colliders are kinematic drivers"):]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    exec(compile("import deformx as dx\n" + code, "README.md", "exec"), {})

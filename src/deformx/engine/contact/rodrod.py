@@ -54,15 +54,17 @@ def argsort_heap(key):
 
 
 @njit(cache=True, error_model="numpy")
-def build_pairs(segs, seg_a, seg_b, seg_rod, seg_k, seg_ne, seg_closed, excluded, radius, pos,
-                pos2, skin, pairs, rod_group):
-    """Candidate pairs among the segments ``segs`` whose padded boxes overlap at ``pos`` or
-    ``pos2``; rods of different contact groups (``rod_group``) never pair.
+def build_pairs(md, pos, pos2, skin, pairs):
+    """Candidate pairs among the rods' segments (model bundle ``md``) whose padded boxes
+    overlap at ``pos`` or ``pos2``; rods of different contact groups never pair.
 
     Segment (element) e joins nodes ``seg_a[e]``, ``seg_b[e]`` of rod ``seg_rod[e]`` (local
     index ``seg_k[e]`` of ``seg_ne[e]`` elements, closed or not). Returns (pairs, count) with
     pairs of element indices; ``pairs`` is grown (doubled) when full.
     """
+    segs, seg_a, seg_b, seg_rod, seg_k = md.segs, md.seg_a, md.seg_b, md.seg_rod, md.seg_k
+    seg_ne, seg_closed, excluded, radius, rod_group = (md.seg_ne, md.seg_closed, md.excluded,
+                                                       md.seg_radius, md.group)
     S = segs.shape[0]
     lo = np.empty((S, 3))
     hi = np.empty((S, 3))
@@ -203,10 +205,11 @@ def pair_contact(i, j, seg_a, seg_b, radius, pos_i, pos_j, vel_i, vel_j, mass, n
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def pair_forces(pairs, n_pairs, seg_a, seg_b, radius, pos, vel, mass, node_kmin, dt_ref,
-                stiffness, damping, mu, out) -> int:
+def pair_forces(pairs, n_pairs, md, pos, vel, dt_ref, rr, out) -> int:
     """Equal and opposite forces of all touching pairs, added to ``out`` (N, per node);
-    returns the number of touching pairs."""
+    returns the number of touching pairs. ``rr``: stiffness, damping, friction."""
+    seg_a, seg_b, radius, mass, node_kmin = md.seg_a, md.seg_b, md.seg_radius, md.mass, md.node_kmin
+    stiffness, damping, mu = rr[0], rr[1], rr[2]
     touching = 0
     for p in range(n_pairs):
         i, j = pairs[p, 0], pairs[p, 1]
@@ -242,8 +245,7 @@ def _add_stiffness(el_K, e, s, kn, n):
 
 
 @njit(cache=True, error_model="numpy")
-def rod_pair_forces(r, pairs, n_pairs, seg_a, seg_b, seg_rod, radius, pos, vel, xp, vp, mass,
-                    node_kmin, dt_ref, h, rr, force, contact_force, el_K, want_K) -> int:
+def rod_pair_forces(r, pairs, n_pairs, st, md, wk, dt_ref, h, rr, want_K) -> int:
     """Rod-rod contact forces on rod ``r`` for an implicit solve of that rod alone.
 
     Its own segments are at the iterate (``pos``, ``vel``); other rods' segments at their
@@ -251,6 +253,10 @@ def rod_pair_forces(r, pairs, n_pairs, seg_a, seg_b, seg_rod, radius, pos, vel, 
     a pair when it is solved). Self-contact pairs act on both of their segments. With
     ``want_K`` the normal stiffness ``k + c / h`` of each contact is added to ``el_K``.
     """
+    pos, vel, xp, vp = st.pos, st.vel, wk.xp, wk.vp
+    seg_a, seg_b, seg_rod, radius = md.seg_a, md.seg_b, md.seg_rod, md.seg_radius
+    mass, node_kmin = md.mass, md.node_kmin
+    force, contact_force, el_K = wk.force, wk.contact_force, wk.el_K
     touching = 0
     for p in range(n_pairs):
         i, j = pairs[p, 0], pairs[p, 1]

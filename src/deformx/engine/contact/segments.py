@@ -443,8 +443,8 @@ def _add_K(el_K, e, q, w, kn, kt, n):
 
 
 @njit(cache=True, error_model="numpy")
-def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, node_radius,
-                          node_kmin, cols, el_K, force, contact_force, commit, want_K) -> int:
+def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, md, wk, cols, commit,
+                          want_K) -> int:
     """Add the contact forces of rod ``r`` with every collider; returns the contact count.
 
     Two kinds of contact, so that a lying rope is supported evenly and a thin edge between two
@@ -461,6 +461,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, mass, n
     b-a, b-b); ``commit`` stores the friction anchors (once per accepted step). ``pen`` (N, C)
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
+    mass, node_radius, node_kmin = md.mass, md.node_radius, md.node_kmin
+    el_K, force, contact_force = wk.el_K, wk.force, wk.contact_force
     kind, par, mesh_rng, allowed = cols.kind, cols.par, cols.rng, cols.allowed
     # Poses and velocities of the colliders as this rod sees them now (see drivers).
     pose, twist = cols.pose[r], cols.twist[r]

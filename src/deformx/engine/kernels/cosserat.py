@@ -27,18 +27,20 @@ def rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed):
 
 
 @njit(cache=True, error_model="numpy")
-def rod_internal_loads(
-    r: int, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
-    pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor, rest_kappa,
-    force, torque, dil, kappa, stress, couple, scr_C, scr_X, scr_edot,
-) -> None:
-    """Write internal forces (lab, N) and torques (material, N m) of rod ``r``.
+def rod_internal_loads(r: int, st, md, wk) -> None:
+    """Write internal forces (lab, N) and torques (material, N m) of rod ``r`` (bundles:
+    state ``st``, model ``md``, work ``wk``; see :mod:`.bundles`).
 
     ``force``/``torque`` are overwritten on the rod's nodes/elements. ``dil`` (element
     dilatation), ``kappa`` (Voronoi curvature), ``stress`` and ``couple`` (material-frame
     resultants) are left for diagnostics and divergence checks.
     """
-    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
+    pos, vel, Q, omega = st.pos, st.vel, st.Q, st.omega
+    J, S, rest_len, rest_sigma, B = md.J, md.S, md.rest_len, md.rest_sigma, md.B
+    rest_vor, rest_kappa = md.rest_vor, md.rest_kappa
+    force, torque, dil, kappa, stress = wk.force, wk.torque, wk.dil, wk.kappa, wk.stress
+    couple, scr_C, scr_X, scr_edot = wk.couple, wk.scr_C, wk.scr_X, wk.scr_edot
+    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, md.node0, md.elem0, md.vor0, md.ne, md.closed)
 
     # Stretch / shear: element strain, stress, and the lab-frame stress Q^T n / e.
     p0 = p1 = p2 = 0.0  # lab-frame stress of the element before

@@ -41,9 +41,7 @@ def _refresh_pairs(pos, pos2, skin, force_build, st, md, pairs):
     state, ref, nodes = st.pair_state, st.ref, md.nodes
     if force_build or state[1] == 0 or max(max_displacement(pos, ref, nodes),
                                            max_displacement(pos2, ref, nodes)) > 0.5 * skin:
-        pairs, n = build_pairs(md.segs, md.seg_a, md.seg_b, md.seg_rod, md.seg_k, md.seg_ne,
-                               md.seg_closed, md.excluded, md.seg_radius, pos, pos2, skin, pairs,
-                               md.group)
+        pairs, n = build_pairs(md, pos, pos2, skin, pairs)
         state[0] = n
         state[1] = 1
         state[2] += 1
@@ -69,9 +67,8 @@ def advance_world_verlet(n_steps, t, sim, st, md, ct, wk, env, cols, pairs):
         for i in nodes:
             for d in range(3):
                 extra[i, d] = 0.0
-        st.pair_state[3] = pair_forces(pairs, st.pair_state[0], md.seg_a, md.seg_b,
-                                       md.seg_radius, xp, vel, md.mass, md.node_kmin, dt,
-                                       sim[SIM_RR], sim[SIM_RR + 1], sim[SIM_RR + 2], extra)
+        st.pair_state[3] = pair_forces(pairs, st.pair_state[0], md, xp, vel, dt,
+                                       sim[SIM_RR:SIM_RR + 3], extra)
         bad = _step_rods(t, sim, st, md, ct, wk, env, cols, step == 0, step == n_steps - 1)
         if bad >= 0:
             wk.status[bad, 2] = step

@@ -60,6 +60,15 @@ def exp_times(w0, w1, w2, tau, R):
 
 
 @njit(cache=True, error_model="numpy")
+def copy_drivers(dst, src) -> None:
+    """dst[:] = src for driver tables, as plain loops (numba's slice assignment costs ~1 us
+    per call here)."""
+    for d in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[d, j] = src[d, j]
+
+
+@njit(cache=True, error_model="numpy")
 def begin_step(dl, dt) -> None:
     """Rates of every driver for the coming step: v += a dt, w += alpha dt."""
     for d in range(dl.shape[0]):

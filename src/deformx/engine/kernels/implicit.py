@@ -39,6 +39,7 @@ from .drivers import (
     add_impulse,
     add_node_reaction,
     begin_step,
+    copy_drivers,
     clamp_rates,
     clamp_values,
     clear_reactions,
@@ -97,9 +98,9 @@ def _rtbr(R, i, m, b0, b1, b2):
 
 
 @njit(cache=True, error_model="numpy")
-def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B, rest_vor,
-              mass, J, nu, kv, geometric, A):
-    """Newton matrix of one rod into ``A`` (block band); returns the number of block rows.
+def _assemble(h, ext, st, md, wk, nu, kv, geometric, A):
+    """Newton matrix of one rod (extent ``ext``, see ``rod_extent``) into ``A`` (block band);
+    returns the number of block rows.
 
     ``kv`` = 1 + (Kelvin-Voigt retardation time) / h scales the elastic stiffness. The stress
     (geometric) terms are added for elements in tension only, and only with ``geometric``:
@@ -111,6 +112,9 @@ def _assemble(h, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B
     2k + 2 and rotation block 2k + 1; Voronoi domain j couples rotation blocks 2j + 1, 2j + 3.
     The sums are formed in the same order as by accumulating each term into a zeroed band.
     """
+    n0, e0, v0, ne, nn, _, closed = ext
+    pos, Q, dil, stress = st.pos, st.Q, wk.dil, wk.stress
+    S, rest_len, B, rest_vor, mass, J = md.S, md.rest_len, md.B, md.rest_vor, md.mass, md.J
     nb = 2 * ne + (0 if closed else 1)
     zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     store_block(A, 0, 1, zero)  # blocks before the first column: unused
@@ -231,8 +235,7 @@ def _plane_gap(planes, p, pos, g, radius):
 
 
 @njit(cache=True, error_model="numpy")
-def _contacts(phase, n0, nn, h, planes, pos, xn, mass, node_radius, node_kmin, anchor, anchor_on,
-              c_plane, c_stick, c_dir, force, contact_force, A, add_forces) -> int:
+def _contacts(phase, n0, nn, h, planes, st, md, wk, A, add_forces) -> int:
     """Implicit plane contact of one rod with a fixed active set per Newton solve.
 
     Normal force ``-k gap - c v_n``. A sticking node is held by a spring of stiffness k to its
@@ -246,6 +249,9 @@ def _contacts(phase, n0, nn, h, planes, pos, xn, mass, node_radius, node_kmin, a
     phase PREDICT: choose the set at the predictor; ITERATE: add forces (``add_forces``) or
     stiffness (into ``A``); CHECK: correct the set; FINISH: store contact forces and anchors.
     """
+    pos, xn, anchor, anchor_on, c_plane = st.pos, st.xn, st.anchor, st.anchor_on, st.c_plane
+    c_stick, c_dir, mass, node_radius, node_kmin = st.c_stick, st.c_dir, md.mass, md.node_radius, md.node_kmin
+    force, contact_force = wk.force, wk.contact_force
     changes = 0
     for i in range(nn):
         g = n0 + i
@@ -362,14 +368,14 @@ def _contacts(phase, n0, nn, h, planes, pos, xn, mass, node_radius, node_kmin, a
 
 
 @njit(cache=True, error_model="numpy")
-def _more_contacts(r, n0, nn, e0, ne, h, pos, vel, xn, mass, node_radius, node_kmin, cols,
-                   el_K, pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr, force,
-                   contact_force, clear, commit):
+def _more_contacts(r, ext, h, st, md, wk, cols, pairs, n_pairs, rr, clear, commit):
     """Mesh, primitive and rod-rod contact forces of the iterate, and their stiffness.
 
     ``clear`` zeroes ``contact_force`` first (when no plane pass has written it); ``commit``
     (accepted step) stores the friction anchors and the reactions.
     """
+    n0, e0, _, ne, nn, _, _ = ext
+    contact_force, el_K = wk.contact_force, wk.el_K
     if clear:
         for i in range(n0, n0 + nn):
             for d in range(3):
@@ -382,11 +388,10 @@ def _more_contacts(r, n0, nn, e0, ne, h, pos, vel, xn, mass, node_radius, node_k
     # As stiff as the explicit integrator's contact at dt <= 1e-4 s (as for planes).
     dt_ref = min(h, 1e-4)
     if cols is not None:
-        rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, xn, mass, node_radius,
-                              node_kmin, cols, el_K, force, contact_force, commit, True)
+        rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, st.pos, st.vel, st.xn, md, wk,
+                              cols, commit, True)
     if n_pairs > 0:
-        rod_pair_forces(r, pairs, n_pairs, seg_a, seg_b, seg_rod, seg_radius, pos, vel, xp, vp,
-                        mass, node_kmin, dt_ref, h, rr, force, contact_force, el_K, True)
+        rod_pair_forces(r, pairs, n_pairs, st, md, wk, dt_ref, h, rr, True)
 
 
 @njit(cache=True, error_model="numpy")
@@ -439,22 +444,18 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
     gravity = sim[SIM_G:SIM_G + 3]
     max_strain, tol, max_iter = sim[SIM_MAX_STRAIN], sim[SIM_TOL], opts[OPT_ITER]
     rr = sim[SIM_RR:SIM_RR + 3]
-    rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed = md.node0, md.elem0, md.vor0, md.ne, md.closed
     rod_nu, rod_tau = md.nu, md.tau
     pos, vel, Q, omega = st.pos, st.vel, st.Q, st.omega
     xn, vn, Qn, wn, fn_el, tn_el = st.xn, st.vn, st.Qn, st.wn, st.fn_el, st.tn_el
-    anchor, anchor_on, c_plane, c_stick, c_dir = st.anchor, st.anchor_on, st.c_plane, st.c_stick, st.c_dir
-    h_prev, rate = st.h_prev, st.rate
-    mass, node_radius, node_kmin, J, S = md.mass, md.node_radius, md.node_kmin, md.J, md.S
-    rest_len, rest_sigma, B, rest_vor, rest_kappa = md.rest_len, md.rest_sigma, md.B, md.rest_vor, md.rest_kappa
-    seg_a, seg_b, seg_rod, seg_radius = md.seg_a, md.seg_b, md.seg_rod, md.seg_radius
-    fext, text = ct.fext, ct.text
-    force, contact_force, torque, dil, stress = wk.force, wk.contact_force, wk.torque, wk.dil, wk.stress
-    kappa, couple, scr_C, scr_X, scr_edot = wk.kappa, wk.couple, wk.scr_C, wk.scr_X, wk.scr_edot
-    el_K, xp, vp, stats, status = wk.el_K, wk.xp, wk.vp, wk.stats, wk.status
+    anchor_on, h_prev, rate = st.anchor_on, st.h_prev, st.rate
+    mass, J, rest_len, rest_vor = md.mass, md.J, md.rest_len, md.rest_vor
+    seg_rod, fext, text = md.seg_rod, ct.fext, ct.text
+    force, torque, dil, kappa = wk.force, wk.torque, wk.dil, wk.kappa
+    el_K, stats, status = wk.el_K, wk.stats, wk.status
     planes = env.planes
     h = dt
-    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed)
+    ext = rod_extent(r, md.node0, md.elem0, md.vor0, md.ne, md.closed)
+    n0, e0, v0, ne, nn, nv, closed = ext
     c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
     f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
     clamped = c1 > c0 or f1 > f0
@@ -529,10 +530,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
         kv = 1.0 + tau / hs
         inv_hs = 1.0 / hs  # the per-node and per-element loops multiply
         if tau > 0.0:  # internal loads at the step start, for the viscous (rate) term
-            rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
-                               pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
-                               rest_kappa, force, torque, dil, kappa, stress, couple,
-                               scr_C, scr_X, scr_edot)
+            rod_internal_loads(r, st, md, wk)
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     fn_el[i, d] = force[i, d]
@@ -550,8 +548,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
         if cols is not None:
             collider_poses(r, elapsed + hs, cols, dl)
         if has_planes:
-            _contacts(PREDICT, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
-                      anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)
+            _contacts(PREDICT, n0, nn, hs, planes, st, md, wk, no_band, False)
         set_rounds = 0
         budget = max_iter
         step_scale = 1.0
@@ -566,10 +563,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
         _implied_rates(n0, nn, e0, ne, inv_hs, pos, xn, Q, Qn, vel, omega)
         while it < budget:
             it += 1
-            rod_internal_loads(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed,
-                               pos, vel, Q, omega, J, S, rest_len, rest_sigma, B, rest_vor,
-                               rest_kappa, force, torque, dil, kappa, stress, couple,
-                               scr_C, scr_X, scr_edot)
+            rod_internal_loads(r, st, md, wk)
             failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
             if failed != OK:
                 break
@@ -584,13 +578,9 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
                 for d in range(3):
                     force[i, d] += mass[i] * gravity[d] + fext[i, d]
             if has_planes:
-                _contacts(ITERATE, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
-                          anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, True)
+                _contacts(ITERATE, n0, nn, hs, planes, st, md, wk, no_band, True)
             if more_contacts:
-                _more_contacts(r, n0, nn, e0, ne, hs, pos, vel, xn, mass, node_radius, node_kmin,
-                               cols, el_K, pairs, n_pairs,
-                               seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr, force,
-                               contact_force, not has_planes, False)
+                _more_contacts(r, ext, hs, st, md, wk, cols, pairs, n_pairs, rr, not has_planes, False)
             # Residual (negated): forces minus inertia and damping.
             for i in range(nn):
                 g = n0 + i
@@ -618,11 +608,9 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
             for geometric in (True, False):
                 if not refactor:
                     break
-                _assemble(hs, n0, e0, v0, ne, nn, closed, pos, Q, dil, stress, S, rest_len, B,
-                          rest_vor, mass, J, nu, kv, geometric, A)
+                _assemble(hs, ext, st, md, wk, nu, kv, geometric, A)
                 if has_planes:
-                    _contacts(ITERATE, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
-                              anchor_on, c_plane, c_stick, c_dir, force, contact_force, A, False)
+                    _contacts(ITERATE, n0, nn, hs, planes, st, md, wk, A, False)
                 if more_contacts:
                     _add_element_stiffness(A, e0, ne, nn, el_K)
                 for q in range(nb):
@@ -680,9 +668,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
             done_iterating = early or update <= tol * length_scale or it == budget
             if done_iterating:
                 if has_planes and set_rounds < MAX_SET_ROUNDS:
-                    if _contacts(CHECK, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
-                                 anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band,
-                                 False) > 0:
+                    if _contacts(CHECK, n0, nn, hs, planes, st, md, wk, no_band, False) > 0:
                         # The contact set changed: solve again with it (fresh matrix).
                         set_rounds += 1
                         budget = it + max_iter
@@ -715,13 +701,9 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
             return t
         # Accepted (velocities are the last iterate's): friction anchors and clamp rates.
         if has_planes:
-            _contacts(FINISH, n0, nn, hs, planes, pos, xn, mass, node_radius, node_kmin, anchor,
-                      anchor_on, c_plane, c_stick, c_dir, force, contact_force, no_band, False)
+            _contacts(FINISH, n0, nn, hs, planes, st, md, wk, no_band, False)
         if more_contacts:
-            _more_contacts(r, n0, nn, e0, ne, hs, pos, vel, xn, mass, node_radius, node_kmin,
-                           cols, el_K, pairs, n_pairs,
-                           seg_a, seg_b, seg_rod, seg_radius, xp, vp, rr, force,
-                           contact_force, not has_planes, True)
+            _more_contacts(r, ext, hs, st, md, wk, cols, pairs, n_pairs, rr, not has_planes, True)
         if cols is not None:
             collider_impulses(r, hs, cols, env)
         clamp_rates(elapsed + hs, c0, c1, f0, f1, pos, vel, Q, omega, env, dl)
@@ -772,6 +754,6 @@ def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, st, md, ct, wk,
     for r in range(r_begin, r_end):
         dl = env.dloc[r]
         if load:
-            dl[:, :] = drv
+            copy_drivers(dl, drv)
         wk.times[r] = advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols,
                                            dl, pairs, n_pairs)

@@ -11,11 +11,11 @@ from __future__ import annotations
 from numba import njit
 
 from .bundles import (
-    OPT_COUPLED, OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, SIM_DT, SIM_T, carve_cols, carve_env,
+    OPT_COUPLED, OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, SIM_T, carve_cols, carve_env,
     carve_rods,
 )
 from .coupled import advance_world_implicit, advance_world_verlet
-from .drivers import begin_step, end_step
+from .drivers import begin_step, copy_drivers, end_step
 from .implicit import advance_rods_implicit
 from .verlet import OK, advance_rods
 
@@ -27,7 +27,7 @@ def _finish(n_steps, opts, wk, env, drv):
     r0, r1 = opts[OPT_R0], opts[OPT_R1]
     if opts[OPT_STORE]:
         if r1 > r0:
-            drv[:, :] = env.dloc[r0]
+            copy_drivers(drv, env.dloc[r0])
     bad = -1
     for r in range(r0, r1):
         if wk.status[r, 0] != OK and (bad < 0 or wk.status[r, 2] < wk.status[bad, 2]):
@@ -44,7 +44,7 @@ def step_verlet(n_steps, sim, opts, RF, RI, RF3, EF, EI, CF, CI, drv, pairs):
     t = sim[SIM_T]
     if opts[OPT_COUPLED]:
         for r in range(md.ne.shape[0]):
-            env.dloc[r][:, :] = drv
+            copy_drivers(env.dloc[r], drv)
         pairs = advance_world_verlet(n_steps, t, sim, st, md, ct, wk, env, cols, pairs)
     else:
         advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, st, md, ct, wk, env, cols, drv,
@@ -62,7 +62,7 @@ def step_stable(n_steps, sim, opts, RF, RI, RF3, EF, EI, CF, CI, drv, pairs):
     t = sim[SIM_T]
     if opts[OPT_COUPLED]:
         for r in range(md.ne.shape[0]):
-            env.dloc[r][:, :] = drv
+            copy_drivers(env.dloc[r], drv)
         pairs = advance_world_implicit(n_steps, t, sim, opts, st, md, ct, wk, env, cols, pairs)
     else:
         advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, opts, st, md, ct, wk,

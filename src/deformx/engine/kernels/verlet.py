@@ -22,6 +22,7 @@ from .drivers import (
     add_impulse,
     add_node_reaction,
     begin_step,
+    copy_drivers,
     clamp_rate,
     clamp_rates,
     clamp_values,
@@ -113,10 +114,7 @@ def advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, use_extra, st
         t += h
         clamp_values(h, c0, c1, f0, f1, pos, Q, env, dl)
 
-        rod_internal_loads(r, md.node0, md.elem0, md.vor0, md.ne, md.closed,
-                           pos, vel, Q, omega, md.J, md.S, md.rest_len, md.rest_sigma, md.B,
-                           md.rest_vor, md.rest_kappa, force, torque, dil, wk.kappa, wk.stress,
-                           wk.couple, wk.scr_C, wk.scr_X, wk.scr_edot)
+        rod_internal_loads(r, st, md, wk)
         for i in range(n0, n0 + nn):
             force[i, 0] += mass[i] * g0 + fext[i, 0]
             force[i, 1] += mass[i] * g1 + fext[i, 1]
@@ -133,8 +131,8 @@ def advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, use_extra, st
                                 contact_force)
             if cols is not None:
                 collider_poses(r, h, cols, dl)
-                rod_collider_contacts(r, n0, nn, e0, ne, dt, dt, pos, vel, pos, mass, node_radius,
-                                      node_kmin, cols, wk.el_K, force, contact_force, True, False)
+                rod_collider_contacts(r, n0, nn, e0, ne, dt, dt, pos, vel, pos, md, wk, cols,
+                                      True, False)
                 collider_impulses(r, dt, cols, env)
             if use_extra:
                 extra = wk.extra
@@ -251,6 +249,6 @@ def advance_rods(r_begin, r_end, n_steps, t, sim, st, md, ct, wk, env, cols, drv
     for r in range(r_begin, r_end):
         dl = env.dloc[r]
         if load:
-            dl[:, :] = drv
+            copy_drivers(dl, drv)
         wk.times[r] = advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, False,
                                   False, False)
