@@ -120,12 +120,12 @@ def internal_forces_seconds(world: dx.World, repeats: int, calls: int = 20000) -
     from deformx.engine.kernels.cosserat import rod_internal_loads
 
     @njit(cache=False)
-    def loop(n, RF, RI, RF3):
-        st, md, _, wk = carve_rods(RF, RI, RF3)
+    def loop(n, RF, RI):
+        rd = carve_rods(RF, RI)
         for _ in range(n):
-            rod_internal_loads(0, st, md, wk)
+            rod_internal_loads(0, rd)
 
-    args = world._bufs[:3]  # the rods' buffers
+    args = world._bufs[:2]  # the rods' buffers
     loop(10, *args)
 
     def once():

@@ -11,17 +11,10 @@ from deformx.engine.kernels.bundles import GROUPS, carve_cols, carve_env, carve_
 
 
 @njit
-def _addresses(RF, RI, RF3, EF, EI, CF, CI):
-    """(data address, size) of every carved field, in bundle order."""
+def _addresses(RF, RI, EF, EI, CF, CI):
+    """(data address, size) of every carved array, in bundle order."""
     out = []
-    st, md, ct, wk = carve_rods(RF, RI, RF3)
-    for a in literal_unroll(st):
-        out.append((a.ctypes.data, a.size))
-    for a in literal_unroll(md):
-        out.append((a.ctypes.data, a.size))
-    for a in literal_unroll(ct):
-        out.append((a.ctypes.data, a.size))
-    for a in literal_unroll(wk):
+    for a in literal_unroll(carve_rods(RF, RI)):
         out.append((a.ctypes.data, a.size))
     for a in literal_unroll(carve_env(EF, EI)):
         out.append((a.ctypes.data, a.size))
@@ -40,12 +33,13 @@ def test_carved_fields_are_the_python_views():
     world.step()
     got = _addresses(*world._bufs)
     packs = (world._rods_p, world._env, world._cols_p)
-    want = [(p[name].ctypes.data, p[name].size) for p, group in zip(packs, ("rods", "env", "cols"))
-            for name, _, _ in GROUPS[group]]
+    names = [spec[0] for grp in ("rods", "env", "cols") for spec in GROUPS[grp]]
+    want = [(p.arrays[spec[0]].ctypes.data, p.arrays[spec[0]].size)
+            for p, grp in zip(packs, ("rods", "env", "cols")) for spec in GROUPS[grp]]
     assert len(got) == len(want)
-    for (name, _, _), g, w in zip([f for grp in ("rods", "env", "cols") for f in GROUPS[grp]],
-                                  got, want):
+    for name, g, w in zip(names, got, want):
         assert g == w, name
-    # Field shapes follow the spec (a wrong dimension count would not compile above).
+    # Named fields are rows of the stacked arrays, and the rods' arrays views of them.
     assert world.arrays["Q"].shape == (world.arrays["elem0"][-1] + 8, 3, 3)
-    assert np.shares_memory(world.rods[0].positions, world._rods_p.F3)
+    assert np.shares_memory(world.rods[0].positions, world._rods_p.arrays["n3"])
+    assert np.shares_memory(world.rods[1].directors, world._rods_p.arrays["e33"])

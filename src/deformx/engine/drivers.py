@@ -51,19 +51,101 @@ def rotation(name: str, R: Any) -> np.ndarray:
     return R
 
 
+class DriverTable:
+    """A world's drivers: one row each, what the rods put on them, impulses, free rows.
+
+    ``rows`` (D, D_COLS) is what the kernels integrate; ``env`` is the world's current ``env``
+    buffer group, whose per-rod ``dreact`` / ``dimp`` the loads and impulses are summed from
+    (``impulse_base`` keeps what was accumulated before the group was last rebuilt).
+    """
+
+    def __init__(self) -> None:
+        self.rows = np.zeros((0, D_COLS))
+        self.impulse_base = np.zeros((0, 6))
+        self.env = None
+        self._free: list[int] = []
+
+    def add(self, handle: "Driver") -> None:
+        """Give ``handle`` a row (a released one if there is one), starting from its own."""
+        if self._free:
+            index = self._free.pop()
+            self.rows[index] = handle._own
+        else:
+            index = self.rows.shape[0]
+            self.rows = np.vstack([self.rows, handle._own[None]])
+            self.impulse_base = np.vstack([self.impulse_base, np.zeros((1, 6))])
+        self.impulse_base[index] = 0.0
+        handle._table, handle._driver = self, index
+
+    def release(self, handle: "Driver") -> None:
+        """Take ``handle``'s row back; the handle keeps a copy of its last state."""
+        handle._own = self.rows[handle._driver].copy()
+        self._free.append(handle._driver)
+        handle._table, handle._driver = None, -1
+
+    def load(self, d: int) -> np.ndarray:
+        """Force and torque (6) the rods put on driver d in the last step."""
+        if self.env is None or self.env["dreact"].shape[1] <= d:
+            return np.zeros(6)
+        return self.env["dreact"][:, d].sum(axis=0)
+
+    def impulse(self, d: int) -> np.ndarray:
+        out = self.impulse_base[d].copy()
+        if self.env is not None and self.env["dimp"].shape[1] > d:
+            out += self.env["dimp"][:, d].sum(axis=0)
+        return out
+
+    def reset_impulse(self, d: int) -> None:
+        self.impulse_base[d] = 0.0
+        if self.env is not None and self.env["dimp"].shape[1] > d:
+            self.env["dimp"][:, d] = 0.0
+
+    def rebind(self, env) -> None:
+        """Use a rebuilt ``env`` group, keeping the impulses accumulated in the old one."""
+        if self.env is not None:
+            dimp = self.env["dimp"]
+            self.impulse_base[: dimp.shape[1]] += dimp.sum(axis=0)
+        self.env = env
+
+    def set_many(self, handles: Sequence["Driver"], **values: Any) -> None:
+        """Array form of the setters: each value has one row per handle (see
+        ``World.set_drivers``)."""
+        index = np.array([h._driver for h in handles], dtype=np.int64)
+        if any(h._table is not self for h in handles):
+            raise ValueError("drivers: every driver must belong to this world")
+        n = index.shape[0]
+        for name, col0, width in (("position", D_P, 3), ("rotation", D_R, 9),
+                                  ("velocity", D_V, 3), ("angular_velocity", D_W, 3),
+                                  ("acceleration", D_A, 3), ("angular_acceleration", D_AL, 3)):
+            value = values.get(name)
+            if value is None:
+                continue
+            arr = np.asarray(value, dtype=np.float64).reshape(n, -1)
+            if arr.shape != (n, width) or not np.all(np.isfinite(arr)):
+                raise ValueError(f"{name} must be finite with shape ({n}, "
+                                 f"{'3, 3' if width == 9 else 3}), got {np.shape(value)}")
+            if name == "rotation":
+                R = arr.reshape(n, 3, 3)
+                err = np.abs(R @ R.transpose(0, 2, 1) - np.eye(3)).max(initial=0.0)
+                if err > 1e-6 or np.any(np.linalg.det(R) < 0.0):
+                    raise ValueError("rotation must hold rotation matrices (orthonormal, det +1)")
+            self.rows[index, col0:col0 + width] = arr
+
+
 class Driver:
-    """A handle on one driver row: owned by the handle until its world registers it."""
+    """A handle on one driver row: its own row until a world's table takes it in, then a view
+    with an index into that table."""
 
     def __init__(self) -> None:
         self._own = fresh_row()
-        self._world = None
+        self._table: DriverTable | None = None
         self._driver = -1
 
     @property
     def _row(self) -> np.ndarray:
-        if self._world is None:
+        if self._table is None:
             return self._own
-        return self._world._drv[self._driver]
+        return self._table.rows[self._driver]
 
     # -------------------------------------------------------------- reading
     @property
@@ -110,19 +192,19 @@ class Driver:
     def impulse(self) -> np.ndarray:
         """Force and torque integrated over time since :meth:`reset_impulse` (6: N s, N m s;
         world frame, torque about the driver's origin)."""
-        if self._world is None:
+        if self._table is None:
             return np.zeros(6)
-        return self._world._driver_impulse(self._driver)
+        return self._table.impulse(self._driver)
 
     def reset_impulse(self) -> None:
         """Start accumulating :attr:`impulse` afresh."""
-        if self._world is not None:
-            self._world._reset_impulse(self._driver)
+        if self._table is not None:
+            self._table.reset_impulse(self._driver)
 
     def _load(self) -> np.ndarray:
-        if self._world is None:
+        if self._table is None:
             return np.zeros(6)
-        return self._world._driver_load(self._driver)
+        return self._table.load(self._driver)
 
     # -------------------------------------------------------------- setting
     def _set_rotation(self, R: np.ndarray) -> None:

@@ -6,78 +6,76 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from .kernels.bundles import GROUPS, STATE_FIELDS
+from .kernels.bundles import GROUPS
 
 _HEAD = 5  # layout row: offset, then up to four dimensions
 
 
 class Packed:
-    """One group's buffers and a numpy view per field (``packed["pos"]``).
+    """One group's float and int buffers, a numpy view per array (``packed.arrays``) and per
+    named field (``packed["pos"]``: a row of a stacked array, or a whole array).
 
-    Each group has a float and an int buffer holding its fields one after another (the int
-    buffer starts with the layout: per field its offset and up to four dimensions); the
-    ``rods`` group also keeps its (n, 3) float fields as rows of a third, (rows, 3) buffer, so
-    that the kernels get them by slicing rather than reshaping (~7x cheaper on every call).
-    Fields are laid out in spec order, so the first ``STATE_FIELDS[group]`` of them (the state)
-    are a prefix of every buffer: :meth:`state` copies exactly those.
+    The int buffer starts with the layout (per array: offset, then up to four dimensions),
+    which the kernels read to carve the buffers. The state of a group (see ``GROUPS``) is the
+    first rows of its stacked arrays and the whole of its state arrays: :meth:`state` copies
+    exactly those.
     """
 
     def __init__(self, group: str, dims: Mapping[str, int]) -> None:
         spec = GROUPS[group]
         self.group = group
         shapes = [tuple(int(dims[d]) if isinstance(d, str) else d for d in shape)
-                  for _, _, shape in spec]
-        rows3 = group == "rods"
-        self._head = [0, 1 + _HEAD * len(spec), 0]
+                  for _, _, shape, _, _ in spec]
+        header = 1 + _HEAD * len(spec)
         layout = np.zeros((len(spec), _HEAD), dtype=np.int64)
-        where, size = [], list(self._head)
-        self._state_end = list(self._head)
-        for k, ((name, kind, _), shape) in enumerate(zip(spec, shapes)):
-            b = 2 if (rows3 and kind == "f" and shape[1:] == (3,)) else (0 if kind == "f" else 1)
-            n = shape[0] if b == 2 else int(np.prod(shape))
-            layout[k, 0] = size[b]
+        size = {"f": 0, "i": header}
+        for k, ((_, kind, _, _, _), shape) in enumerate(zip(spec, shapes)):
+            layout[k, 0] = size[kind]
             layout[k, 1:1 + len(shape)] = shape
-            where.append((b, size[b], n))
-            size[b] += n
-            if k + 1 == STATE_FIELDS[group]:
-                self._state_end = list(size)
-        self.buffers = (np.zeros(size[0]), np.zeros(size[1], dtype=np.int64),
-                        np.zeros((size[2], 3)))
-        self.buffers[1][0] = len(spec)
-        self.buffers[1][1:self._head[1]] = layout.ravel()
+            size[kind] += int(np.prod(shape))
+        self.F = np.zeros(size["f"])
+        self.I = np.zeros(size["i"], dtype=np.int64)
+        self.I[0] = len(spec)
+        self.I[1:header] = layout.ravel()
+        self.arrays: dict[str, np.ndarray] = {}
         self.fields: dict[str, np.ndarray] = {}
-        for (name, _, _), shape, (b, o, n) in zip(spec, shapes, where):
-            self.fields[name] = self.buffers[b][o:o + n].reshape(shape)
-        self.shapes = dict(zip((s[0] for s in spec), shapes))
-
-    @property
-    def F(self) -> np.ndarray:
-        """The float buffer."""
-        return self.buffers[0]
-
-    @property
-    def I(self) -> np.ndarray:  # noqa: E743 (the int buffer)
-        """The int buffer (layout first)."""
-        return self.buffers[1]
-
-    @property
-    def F3(self) -> np.ndarray:
-        """The (rows, 3) float buffer (rods group; empty for the others)."""
-        return self.buffers[2]
+        self.axes: dict[str, str | int] = {}  # a field's first (per-item) dimension
+        self._state: list[np.ndarray] = []
+        self._state_names: list[str] = []
+        for k, ((name, kind, sym, rows, n_state), shape) in enumerate(zip(spec, shapes)):
+            buf = self.F if kind == "f" else self.I
+            o = int(layout[k, 0])
+            arr = buf[o:o + int(np.prod(shape))].reshape(shape)
+            self.arrays[name] = arr
+            if rows is None:
+                self.fields[name] = arr
+                self.axes[name] = sym[0]
+                if n_state:
+                    self._state.append(arr)
+                    self._state_names.append(name)
+            else:
+                for j, row in enumerate(rows):
+                    self.fields[row] = arr[j]
+                    self.axes[row] = sym[1]
+                    if j < n_state:
+                        self._state.append(self.fields[row])
+                        self._state_names.append(row)
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.fields[name]
 
+    def state_fields(self) -> list[str]:
+        """Names of the state fields, in snapshot order."""
+        return list(self._state_names)
+
     def state(self) -> tuple[np.ndarray, ...]:
-        """Copies of the state prefix of every buffer."""
-        return tuple(buf[h:e].copy() for buf, h, e in zip(self.buffers, self._head,
-                                                          self._state_end))
+        """Copies of the group's state."""
+        return tuple(a.copy() for a in self._state)
 
     def set_state(self, state: Sequence[np.ndarray]) -> None:
-        parts = list(zip(self.buffers, self._head, self._state_end))
-        if len(state) != len(parts) or any(
-                np.shape(s) != buf[h:e].shape for s, (buf, h, e) in zip(state, parts)):
+        if len(state) != len(self._state) or any(
+                np.shape(s) != a.shape for s, a in zip(state, self._state)):
             raise ValueError("state: it was taken from a world of another size (rods, "
                              "colliders or clamps differ)")
-        for s, (buf, h, e) in zip(state, parts):
-            buf[h:e] = s
+        for s, a in zip(state, self._state):
+            a[...] = s

@@ -12,7 +12,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kernels.bundles import GROUPS, STATE_FIELDS
 
 
 @dataclass
@@ -36,28 +35,27 @@ def rod_slices(packed_rods, r: int, rod) -> dict[str, slice]:
             "Qe": slice(n_nodes + e0, n_nodes + e0 + rod.n_elements)}
 
 
-def take_rod(packed, group: str, sl: dict[str, slice]) -> dict[str, np.ndarray]:
-    """Copies of one rod's rows of the state fields of ``group`` (whole-world fields, such
-    as the rod-rod pair list, are left out)."""
+def take_rod(packed, sl: dict[str, slice]) -> dict[str, np.ndarray]:
+    """Copies of one rod's rows of a group's state fields (whole-world fields, such as the
+    rod-rod pair list, are left out)."""
     out = {}
-    for name, _, shape in GROUPS[group][:STATE_FIELDS[group]]:
-        axis = shape[0]
+    for name in packed.state_fields():
+        axis, arr = packed.axes[name], packed[name]
         if axis == "Q":  # query slots: the rod's nodes, then its elements
-            arr = packed[name]
             out[name] = np.concatenate([arr[sl["Qn"]], arr[sl["Qe"]]])
         elif axis in sl:
-            out[name] = packed[name][sl[axis]].copy()
+            out[name] = arr[sl[axis]].copy()
     return out
 
 
-def put_rod(packed, group: str, sl: dict[str, slice], values: dict[str, np.ndarray]) -> None:
-    for name, _, shape in GROUPS[group][:STATE_FIELDS[group]]:
+def put_rod(packed, sl: dict[str, slice], values: dict[str, np.ndarray]) -> None:
+    for name in packed.state_fields():
         if name not in values:
             continue
-        arr = packed[name]
-        if shape[0] == "Q":
+        axis, arr = packed.axes[name], packed[name]
+        if axis == "Q":
             nq = sl["Qn"].stop - sl["Qn"].start
             arr[sl["Qn"]] = values[name][:nq]
             arr[sl["Qe"]] = values[name][nq:]
         else:
-            arr[sl[shape[0]]] = values[name]
+            arr[sl[axis]] = values[name]

@@ -10,16 +10,13 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 from ..errors import SimulationDiverged
-from . import running
+from . import assemble, running
 from . import validation as check
 from .contact import colliders as col
 from .contact.segments import P_AUTO, P_C, P_K, P_MUK, P_MUS
-from .drivers import Driver
+from .drivers import Driver, DriverTable
 from .kernels import implicit, step, verlet
-from .kernels.bundles import (
-    D_A, D_AL, D_COLS, D_P, D_R, D_V, D_W, OPT_COUPLED, OPT_ITER, OPT_LEN, OPT_LOAD, OPT_R0,
-    OPT_R1, OPT_STORE, SIM_DT, SIM_G, SIM_LEN, SIM_MAX_STRAIN, SIM_RR, SIM_SKIN, SIM_T, SIM_TOL,
-)
+from .kernels.bundles import SIM_DT, SIM_G, SIM_LEN, SIM_MAX_STRAIN, SIM_RR, SIM_SKIN, SIM_T, SIM_TOL
 from .kernels.step import advance_drivers
 from .model import pack_rods, set_damping
 from .packing import Packed
@@ -103,9 +100,7 @@ class World:
         self._cols_p: Packed | None = None
         self._stale_rods = True
         self._stale_env = True
-        self._drv = np.zeros((0, D_COLS))
-        self._imp_base = np.zeros((0, 6))
-        self._free_rows: list[int] = []
+        self._drivers = DriverTable()
         self._pairs = np.zeros((64, 2), dtype=np.int64)
 
     # ------------------------------------------------------------------ building
@@ -170,7 +165,7 @@ class World:
         rod._index = len(self._rods)
         self._rods.append(rod)
         for c in rod._clamps:
-            self._register_driver(c)
+            self._drivers.add(c)
         # Pack now so the rod's arrays are views from here on (as documented).
         self._rods_p = pack_rods(self._rods, self._dt)
         self._stale_rods = False
@@ -200,11 +195,11 @@ class World:
     # ------------------------------------------------------------------ colliders
     def _add_collider(self, kind: str, pose: object, params: np.ndarray,
                       mesh: tuple[np.ndarray, np.ndarray] | None = None) -> col.Collider:
-        c = col.Collider(self, len(self._colliders), kind, col.pose_matrix(pose), params, mesh)
+        c = col.Collider(len(self._colliders), kind, col.pose_matrix(pose), params, mesh)
         if mesh is not None:
             col.prepare_mesh(c)
         self._colliders.append(c)
-        self._register_driver(c)
+        self._drivers.add(c)
         self._stale_env = True
         return c
 
@@ -267,54 +262,19 @@ class World:
 
     def _ignore(self, rod: Rod, colliders: Sequence[col.Collider]) -> None:
         for c in colliders:
-            if not isinstance(c, col.Collider) or c._world is not self:
+            if not isinstance(c, col.Collider) or c._table is not self._drivers:
                 raise ValueError(f"ignore: {c!r} is not a collider of this world")
             self._ignored.add((rod._index, c.index))
         self._stale_env = True
 
     # ------------------------------------------------------------------ drivers
-    def _register_driver(self, d: Driver) -> None:
-        """Give driver handle ``d`` a row of the table (a released row if there is one)."""
-        row = d._own
-        if self._free_rows:
-            index = self._free_rows.pop()
-            self._drv[index] = row
-        else:
-            index = self._drv.shape[0]
-            self._drv = np.vstack([self._drv, row[None]])
-            self._imp_base = np.vstack([self._imp_base, np.zeros((1, 6))])
-        self._imp_base[index] = 0.0
-        d._world = self
-        d._driver = index
-
     def _register_clamp(self, clamp) -> None:
-        self._register_driver(clamp)
+        self._drivers.add(clamp)
         self._stale_env = True
 
     def _release_clamp(self, clamp) -> None:
-        self._free_rows.append(clamp._driver)
-        clamp._own = clamp._row.copy()
-        clamp._world = None
-        clamp._driver = -1
+        self._drivers.release(clamp)
         self._stale_env = True
-
-    def _driver_load(self, d: int) -> np.ndarray:
-        env = self._env
-        if env is None or env["dreact"].shape[1] <= d:
-            return np.zeros(6)
-        return env["dreact"][:, d].sum(axis=0)
-
-    def _driver_impulse(self, d: int) -> np.ndarray:
-        env = self._env
-        out = self._imp_base[d].copy()
-        if env is not None and env["dimp"].shape[1] > d:
-            out += env["dimp"][:, d].sum(axis=0)
-        return out
-
-    def _reset_impulse(self, d: int) -> None:
-        self._imp_base[d] = 0.0
-        if self._env is not None and self._env["dimp"].shape[1] > d:
-            self._env["dimp"][:, d] = 0.0
 
     def set_drivers(self, drivers: Sequence[Driver], position: np.ndarray | None = None,
                     rotation: np.ndarray | None = None, velocity: np.ndarray | None = None,
@@ -323,32 +283,13 @@ class World:
                     angular_acceleration: np.ndarray | None = None) -> None:
         """Set many drivers at once (array form of their setters): each given array has one
         row per driver, (n, 3) or (n, 3, 3) for ``rotation`` (world from local), world frame."""
-        index = np.array([d._driver for d in drivers], dtype=np.int64)
-        if np.any(index < 0) or any(d._world is not self for d in drivers):
-            raise ValueError("drivers: every driver must belong to this world")
-        n = index.shape[0]
-        for name, value, col0, width in (("position", position, D_P, 3),
-                                         ("rotation", rotation, D_R, 9),
-                                         ("velocity", velocity, D_V, 3),
-                                         ("angular_velocity", angular_velocity, D_W, 3),
-                                         ("acceleration", acceleration, D_A, 3),
-                                         ("angular_acceleration", angular_acceleration, D_AL, 3)):
-            if value is None:
-                continue
-            arr = np.asarray(value, dtype=np.float64).reshape(n, -1)
-            if arr.shape != (n, width) or not np.all(np.isfinite(arr)):
-                raise ValueError(f"{name} must be finite with shape ({n}, "
-                                 f"{'3, 3' if width == 9 else 3}), got {np.shape(value)}")
-            if name == "rotation":
-                R = arr.reshape(n, 3, 3)
-                err = np.abs(R @ R.transpose(0, 2, 1) - np.eye(3)).max(initial=0.0)
-                if err > 1e-6 or np.any(np.linalg.det(R) < 0.0):
-                    raise ValueError("rotation must hold rotation matrices (orthonormal, det +1)")
-            self._drv[index, col0:col0 + width] = arr
+        self._drivers.set_many(drivers, position=position, rotation=rotation, velocity=velocity,
+                               angular_velocity=angular_velocity, acceleration=acceleration,
+                               angular_acceleration=angular_acceleration)
 
     def driver_impulses(self, drivers: Sequence[Driver]) -> np.ndarray:
         """Impulses (n, 6) of many drivers since their last reset (see ``Driver.impulse``)."""
-        return np.array([self._driver_impulse(d._driver) for d in drivers]).reshape(-1, 6)
+        return np.array([d.impulse for d in drivers]).reshape(-1, 6)
 
     # ------------------------------------------------------------------ preparing
     def _rod_parameters_changed(self) -> None:
@@ -373,65 +314,18 @@ class World:
         self._check_damping()
         set_damping(self._rods_p, self._rods, self._dt)
         rp = self._rods_p
-        R = len(self._rods)
-        N, E = rp["pos"].shape[0], rp["Q"].shape[0]
-        D = self._drv.shape[0]
-        # Impulses accumulated so far survive the rebuild.
-        if self._env is not None:
-            dimp = self._env["dimp"]
-            self._imp_base[: dimp.shape[1]] += dimp.sum(axis=0)
-        pn, fe = [], []
-        rod_pcon, rod_fcon = [0], [0]
-        for i, rod in enumerate(self._rods):
-            n0, e0 = int(rp["node0"][i]), int(rp["elem0"][i])
-            for c in rod._clamps:
-                pn.append((n0 + c.node, c._driver))
-                if c.element is not None:
-                    fe.append((e0 + c.element, c._driver))
-            rod_pcon.append(len(pn))
-            rod_fcon.append(len(fe))
-        env = Packed("env", dict(R=R, R1=R + 1, P=len(pn), F=len(fe), L=len(self._planes), D=D))
-        env["rod_pcon"][:] = rod_pcon
-        env["rod_fcon"][:] = rod_fcon
-        if pn:
-            env["pcon_node"][:], env["pcon_drv"][:] = np.array(pn).T
-        if fe:
-            env["fcon_elem"][:], env["fcon_drv"][:] = np.array(fe).T
-        env["fcon_rel"][:] = np.eye(3)
-        if self._planes:
-            env["planes"][:] = np.array(self._planes)
-        self._env = env
-        old = self._cols_p
-        if self._colliders:
-            allowed = np.ones((R, len(self._colliders)), dtype=np.int64)
-            for r, c in self._ignored:
-                allowed[r, c] = 0
-            self._cols_p = col.pack(self._colliders, R, N, N + E, allowed)
-            self._cols_p["drv"][:] = [c._driver for c in self._colliders]
-            if old is not None:  # same rods and colliders: keep anchors and query caches
-                try:
-                    self._cols_p.set_state(old.state())
-                except ValueError:
-                    pass
-        else:
-            self._cols_p = None
-        sim = self._sim
-        sim[SIM_DT] = self._dt
-        sim[SIM_RR:SIM_RR + 3] = self._rod_contact_params
-        sim[SIM_SKIN] = 2.0 * float(rp["seg_radius"].max()) if E else 0.0
+        self._env = assemble.env_group(self._rods, rp, self._planes, self._drivers.rows.shape[0])
+        self._drivers.rebind(self._env)  # impulses accumulated so far survive the rebuild
+        self._cols_p = assemble.cols_group(self._colliders, self._ignored, rp, self._cols_p)
+        self._sim[SIM_DT] = self._dt
+        self._sim[SIM_RR:SIM_RR + 3] = self._rod_contact_params
+        self._sim[SIM_SKIN] = 2.0 * float(rp["seg_radius"].max()) if rp["Q"].shape[0] else 0.0
         coupled = self.rod_contact and rp["segs"].shape[0] > 1
-        self._groups = [(0, R)] if coupled else balanced_groups(rp["ne"], self.threads)
-        self._opts = []
-        for r0, r1 in self._groups:
-            opts = np.zeros(OPT_LEN, dtype=np.int64)
-            opts[OPT_ITER] = self.iterations
-            opts[OPT_COUPLED] = int(coupled)
-            opts[OPT_LOAD] = 1
-            opts[OPT_STORE] = int(len(self._groups) == 1)
-            opts[OPT_R0], opts[OPT_R1] = r0, r1
-            self._opts.append(opts)
+        self._groups = ([(0, len(self._rods))] if coupled
+                        else balanced_groups(rp["ne"], self.threads))
+        self._opts = assemble.run_options(self._groups, self.iterations, coupled)
         cp = self._cols_p
-        self._bufs = (*rp.buffers, env.F, env.I, None if cp is None else cp.F,
+        self._bufs = (rp.F, rp.I, self._env.F, self._env.I, None if cp is None else cp.F,
                       None if cp is None else cp.I)
         self._kernel = step.step_verlet if self.integrator == "verlet" else step.step_stable
         self._stale_env = False
@@ -445,14 +339,14 @@ class World:
                 return
         if self._stale_env or self._stale_rods:
             if not self._rods:
-                advance_drivers(self._drv, n_steps, self._dt)
+                advance_drivers(self._drivers.rows, n_steps, self._dt)
                 self.time += n_steps * self._dt
                 return
             self._prepare()
         self._sim[SIM_T] = self.time
         if len(self._groups) == 1:
             t, bad, self._pairs = self._kernel(n_steps, self._sim, self._opts[0], *self._bufs,
-                                               self._drv, self._pairs)
+                                               self._drivers.rows, self._pairs)
         else:
             t, bad = self._advance_threaded(n_steps)
         if bad >= 0:
@@ -464,13 +358,14 @@ class World:
         work = n_steps * int(self._rods_p["ne"].sum())
         if work >= MIN_THREADED_WORK:
             futures = [pool(len(self._groups)).submit(self._kernel, n_steps, self._sim, opts,
-                                                      *self._bufs, self._drv, self._pairs)
+                                                      *self._bufs, self._drivers.rows,
+                                                      self._pairs)
                        for opts in self._opts]
             results = [f.result() for f in futures]
         else:
-            results = [self._kernel(n_steps, self._sim, opts, *self._bufs, self._drv,
+            results = [self._kernel(n_steps, self._sim, opts, *self._bufs, self._drivers.rows,
                                     self._pairs) for opts in self._opts]
-        self._drv[:] = self._env["dloc"][0]
+        self._drivers.rows[:] = self._env["dloc"][0]
         status = self._rods_p["status"]
         failed = [res[1] for res in results if res[1] >= 0]
         bad = min(failed, key=lambda r: status[r, 2]) if failed else -1
@@ -511,7 +406,7 @@ class World:
                 for k, v in packed.fields.items():
                     out[k if k not in out else f"cols_{k}"] = v
         out["pairs"] = self._pairs
-        out["drivers"] = self._drv
+        out["drivers"] = self._drivers.rows
         return out
 
     # ------------------------------------------------------------------ state
@@ -528,7 +423,7 @@ class World:
         self._ready()
         cp = self._cols_p
         return WorldState(time=self.time, rods=self._rods_p.state(),
-                          cols=None if cp is None else cp.state(), drivers=self._drv.copy(),
+                          cols=None if cp is None else cp.state(), drivers=self._drivers.rows.copy(),
                           pairs=self._pairs.copy())
 
     def set_state(self, state: WorldState) -> None:
@@ -536,36 +431,36 @@ class World:
         if not isinstance(state, WorldState):
             raise ValueError(f"state must be a WorldState from get_state(), got {type(state).__name__}")
         self._ready()
-        if state.drivers.shape != self._drv.shape or (state.cols is None) != (self._cols_p is None):
+        if state.drivers.shape != self._drivers.rows.shape or (state.cols is None) != (self._cols_p is None):
             raise ValueError("state: it was taken from a world with other drivers or colliders")
         self._rods_p.set_state(state.rods)
         if self._cols_p is not None:
             self._cols_p.set_state(state.cols)
-        self._drv[:] = state.drivers
+        self._drivers.rows[:] = state.drivers
         self._pairs = state.pairs.copy()
         self.time = float(state.time)
 
     def _rod_state(self, rod: Rod) -> dict:
         self._ready()
         sl = rod_slices(self._rods_p, rod._index, rod)
-        out = {"rods": take_rod(self._rods_p, "rods", sl),
-               "drivers": {c.node: self._drv[c._driver].copy() for c in rod._clamps}}
+        out = {"rods": take_rod(self._rods_p, sl),
+               "drivers": {c.node: c._row.copy() for c in rod._clamps}}
         if self._cols_p is not None:
-            out["cols"] = take_rod(self._cols_p, "cols", sl)
+            out["cols"] = take_rod(self._cols_p, sl)
         return out
 
     def _set_rod_state(self, rod: Rod, state: dict) -> None:
         self._ready()
         sl = rod_slices(self._rods_p, rod._index, rod)
         try:
-            put_rod(self._rods_p, "rods", sl, state["rods"])
+            put_rod(self._rods_p, sl, state["rods"])
             if self._cols_p is not None and "cols" in state:
-                put_rod(self._cols_p, "cols", sl, state["cols"])
+                put_rod(self._cols_p, sl, state["cols"])
         except (KeyError, ValueError, TypeError) as err:
             raise ValueError(f"state: not a get_state() of this rod ({err})") from None
         for c in rod._clamps:
             if c.node in state.get("drivers", {}):
-                self._drv[c._driver] = state["drivers"][c.node]
+                c._row[:] = state["drivers"][c.node]
         self._rods_p["pair_state"][1] = 0  # positions jumped: rebuild the rod-rod pair list
 
     # ------------------------------------------------------------------ diagnostics

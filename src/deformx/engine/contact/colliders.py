@@ -94,7 +94,7 @@ class Collider(Driver):
     ``step(n)`` (see :mod:`deformx.engine.drivers`); ``force`` (N) and ``torque`` (N m, about
     the collider's origin), world frame, are the rods' load on it during the last step."""
 
-    def __init__(self, world, index: int, kind: str, pose: np.ndarray, params: np.ndarray,
+    def __init__(self, index: int, kind: str, pose: np.ndarray, params: np.ndarray,
                  mesh: tuple[np.ndarray, np.ndarray] | None = None) -> None:
         super().__init__()
         self.index = index

@@ -23,6 +23,25 @@ from numba import njit
 from ..geometry.closest import closest_segment_segment
 from ..kernels.refcount import NO_REFCOUNT
 from .segments import _add_K
+from ..kernels.bundles import (
+    E_EXCLUDED,
+    E_SEG_A,
+    E_SEG_B,
+    E_SEG_CLOSED,
+    E_SEG_K,
+    E_SEG_NE,
+    E_SEG_RADIUS,
+    E_SEG_ROD,
+    N_CONTACT_FORCE,
+    N_FORCE,
+    N_MASS,
+    N_NODE_KMIN,
+    N_POS,
+    N_VEL,
+    N_VP,
+    N_XP,
+    R_GROUP,
+)
 
 
 @njit(cache=True, error_model="numpy")
@@ -54,17 +73,17 @@ def argsort_heap(key):
 
 
 @njit(cache=True, error_model="numpy")
-def build_pairs(md, pos, pos2, skin, pairs):
-    """Candidate pairs among the rods' segments (model bundle ``md``) whose padded boxes
+def build_pairs(rd, pos, pos2, skin, pairs):
+    """Candidate pairs among the rods' segments (the rods' arrays ``rd``) whose padded boxes
     overlap at ``pos`` or ``pos2``; rods of different contact groups never pair.
 
     Segment (element) e joins nodes ``seg_a[e]``, ``seg_b[e]`` of rod ``seg_rod[e]`` (local
     index ``seg_k[e]`` of ``seg_ne[e]`` elements, closed or not). Returns (pairs, count) with
     pairs of element indices; ``pairs`` is grown (doubled) when full.
     """
-    segs, seg_a, seg_b, seg_rod, seg_k = md.segs, md.seg_a, md.seg_b, md.seg_rod, md.seg_k
-    seg_ne, seg_closed, excluded, radius, rod_group = (md.seg_ne, md.seg_closed, md.excluded,
-                                                       md.seg_radius, md.group)
+    segs, seg_a, seg_b, seg_rod, seg_k = rd.segs, rd.ei[E_SEG_A], rd.ei[E_SEG_B], rd.ei[E_SEG_ROD], rd.ei[E_SEG_K]
+    seg_ne, seg_closed, excluded, radius, rod_group = (rd.ei[E_SEG_NE], rd.ei[E_SEG_CLOSED], rd.ei[E_EXCLUDED],
+                                                       rd.e1[E_SEG_RADIUS], rd.ri[R_GROUP])
     S = segs.shape[0]
     lo = np.empty((S, 3))
     hi = np.empty((S, 3))
@@ -205,10 +224,10 @@ def pair_contact(i, j, seg_a, seg_b, radius, pos_i, pos_j, vel_i, vel_j, mass, n
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def pair_forces(pairs, n_pairs, md, pos, vel, dt_ref, rr, out) -> int:
+def pair_forces(pairs, n_pairs, rd, pos, vel, dt_ref, rr, out) -> int:
     """Equal and opposite forces of all touching pairs, added to ``out`` (N, per node);
     returns the number of touching pairs. ``rr``: stiffness, damping, friction."""
-    seg_a, seg_b, radius, mass, node_kmin = md.seg_a, md.seg_b, md.seg_radius, md.mass, md.node_kmin
+    seg_a, seg_b, radius, mass, node_kmin = rd.ei[E_SEG_A], rd.ei[E_SEG_B], rd.e1[E_SEG_RADIUS], rd.n1[N_MASS], rd.n1[N_NODE_KMIN]
     stiffness, damping, mu = rr[0], rr[1], rr[2]
     touching = 0
     for p in range(n_pairs):
@@ -245,7 +264,7 @@ def _add_stiffness(el_K, e, s, kn, n):
 
 
 @njit(cache=True, error_model="numpy")
-def rod_pair_forces(r, pairs, n_pairs, st, md, wk, dt_ref, h, rr, want_K) -> int:
+def rod_pair_forces(r, pairs, n_pairs, rd, dt_ref, h, rr, want_K) -> int:
     """Rod-rod contact forces on rod ``r`` for an implicit solve of that rod alone.
 
     Its own segments are at the iterate (``pos``, ``vel``); other rods' segments at their
@@ -253,10 +272,10 @@ def rod_pair_forces(r, pairs, n_pairs, st, md, wk, dt_ref, h, rr, want_K) -> int
     a pair when it is solved). Self-contact pairs act on both of their segments. With
     ``want_K`` the normal stiffness ``k + c / h`` of each contact is added to ``el_K``.
     """
-    pos, vel, xp, vp = st.pos, st.vel, wk.xp, wk.vp
-    seg_a, seg_b, seg_rod, radius = md.seg_a, md.seg_b, md.seg_rod, md.seg_radius
-    mass, node_kmin = md.mass, md.node_kmin
-    force, contact_force, el_K = wk.force, wk.contact_force, wk.el_K
+    pos, vel, xp, vp = rd.n3[N_POS], rd.n3[N_VEL], rd.n3[N_XP], rd.n3[N_VP]
+    seg_a, seg_b, seg_rod, radius = rd.ei[E_SEG_A], rd.ei[E_SEG_B], rd.ei[E_SEG_ROD], rd.e1[E_SEG_RADIUS]
+    mass, node_kmin = rd.n1[N_MASS], rd.n1[N_NODE_KMIN]
+    force, contact_force, el_K = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE], rd.el_K
     touching = 0
     for p in range(n_pairs):
         i, j = pairs[p, 0], pairs[p, 1]

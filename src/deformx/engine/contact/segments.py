@@ -36,6 +36,13 @@ from ..geometry.bvh import closest_segment_search, nearest_k_search, signed_side
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from ..kernels.refcount import NO_REFCOUNT
 from .primitives import segment_deepest, shape_sdf
+from ..kernels.bundles import (
+    N_CONTACT_FORCE,
+    N_FORCE,
+    N_MASS,
+    N_NODE_KMIN,
+    N_NODE_RADIUS,
+)
 
 MESH = 0
 # par columns
@@ -443,7 +450,7 @@ def _add_K(el_K, e, q, w, kn, kt, n):
 
 
 @njit(cache=True, error_model="numpy")
-def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, md, wk, cols, commit,
+def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, cols, commit,
                           want_K) -> int:
     """Add the contact forces of rod ``r`` with every collider; returns the contact count.
 
@@ -461,8 +468,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, md, wk,
     b-a, b-b); ``commit`` stores the friction anchors (once per accepted step). ``pen`` (N, C)
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
-    mass, node_radius, node_kmin = md.mass, md.node_radius, md.node_kmin
-    el_K, force, contact_force = wk.el_K, wk.force, wk.contact_force
+    mass, node_radius, node_kmin = rd.n1[N_MASS], rd.n1[N_NODE_RADIUS], rd.n1[N_NODE_KMIN]
+    el_K, force, contact_force = rd.el_K, rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE]
     kind, par, mesh_rng, allowed = cols.kind, cols.par, cols.rng, cols.allowed
     # Poses and velocities of the colliders as this rod sees them now (see drivers).
     pose, twist = cols.pose[r], cols.twist[r]

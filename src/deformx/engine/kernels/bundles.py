@@ -1,19 +1,17 @@
 """Packed buffers and the named bundles the kernels see.
 
 Every array of a world lives in a few flat buffers: per group one float64 buffer and one int64
-buffer whose head is a layout table (per field: offset, then up to four dimensions), and for
-the rods a (rows, 3) float buffer holding their many (n, 3) fields. Python keeps numpy views of
-the fields; a kernel call passes only the buffers (a numba call costs ~0.1 us per array
-argument) and the kernels carve them into named tuples here (~1 us for all of them).
+buffer whose head is a layout table (per array: offset, then up to four dimensions). Python
+keeps numpy views of the fields; a kernel call passes only the buffers (a numba call costs
+~0.1 us per array argument) and the kernels carve them into named tuples here.
 
 Groups: ``rods`` (model, state, control, work of all rods; rebuilt when rods are added),
 ``env`` (clamps, planes, drivers' per-rod copies and reactions; rebuilt when clamps, planes
 or colliders change), ``cols`` (collider tables, per-query mesh caches; absent without
 colliders, so plain worlds compile no mesh code).
 
-The field lists below are the single source of truth: Python allocates from them, and each
+The array lists below are the single source of truth: Python allocates from them, and each
 ``carve_*`` builds its tuple in the same order (``tests/test_bundles.py`` checks both agree).
-State fields come first in each group, so a state snapshot is a prefix copy.
 """
 
 from __future__ import annotations
@@ -23,80 +21,110 @@ from collections import namedtuple
 from numba import njit, types
 from numba.extending import overload
 
-# (name, dtype "f" | "i", shape in symbolic dimensions): R rods, N nodes, E elements,
-# V Voronoi domains, S real segments, M real nodes, P node clamps, F frame clamps,
-# D drivers, L planes, C colliders, Q query slots (N + E), and numbers.
-ROD_STATE = (
-    ("pos", "f", ("N", 3)), ("vel", "f", ("N", 3)), ("Q", "f", ("E", 3, 3)),
-    ("omega", "f", ("E", 3)),
-    # Stable integrator memory: step start, previous rates (predictor), viscous loads,
-    # plane friction anchors and the active set, Newton's last step and contraction rate.
-    ("xn", "f", ("N", 3)), ("vn", "f", ("N", 3)), ("Qn", "f", ("E", 3, 3)), ("wn", "f", ("E", 3)),
-    ("fn_el", "f", ("N", 3)), ("tn_el", "f", ("E", 3)), ("anchor", "f", ("N", 3)),
-    ("c_dir", "f", ("N", 3)), ("h_prev", "f", ("R",)), ("rate", "f", ("R",)),
-    ("anchor_on", "i", ("N",)), ("c_plane", "i", ("N",)), ("c_stick", "i", ("N",)),
-    # Rod-rod Verlet list: reference positions and (pairs, valid, builds, touching).
-    ("ref", "f", ("N", 3)), ("pair_state", "i", (4,)),
+# Arrays of a group: (name, dtype "f" | "i", shape in symbolic dimensions, names of its rows
+# or None, state: how many of its first rows (or 1: all of a single array) are state).
+# Dimensions: R rods, N nodes, E elements, V Voronoi domains, S real segments, M real nodes,
+# P node clamps, F frame clamps, D drivers, L planes, C colliders, Q query slots (N + E).
+#
+# The rods' fields are rows of a few stacked arrays (nodes, elements, Voronoi domains, rods;
+# vectors, frames, scalars, integers): the kernels then pass ~17 arrays instead of ~70,
+# which keeps numba's compile time down (it grows with every array of every signature).
+# State rows come first in each stack: positions, velocities, frames, angular velocities;
+# the stable integrator's step start, predictor rates, viscous loads, plane friction anchors
+# and active set, last step and contraction rate; the rod-rod Verlet list's reference
+# positions and (pairs, valid, builds, touching).
+ROD_ARRAYS = (
+    ('n3', 'f', (14, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'anchor', 'c_dir', 'ref',
+                              'fext', 'force', 'contact_force', 'xp', 'vp', 'extra'), 8),
+    ('e3', 'f', (10, 'E', 3), ('omega', 'wn', 'tn_el', 'J', 'inv_J', 'S', 'rest_sigma', 'text',
+                              'torque', 'stress'), 3),
+    ('e33', 'f', (2, 'E', 3, 3), ('Q', 'Qn'), 2),
+    ('v3', 'f', (6, 'V', 3), ('B', 'rest_kappa', 'kappa', 'couple', 'scr_C', 'scr_X'), 0),
+    ('n1', 'f', (3, 'N'), ('mass', 'node_radius', 'node_kmin'), 0),
+    ('e1', 'f', (4, 'E'), ('rest_len', 'seg_radius', 'dil', 'scr_edot'), 0),
+    ('v1', 'f', (1, 'V'), ('rest_vor',), 0),
+    ('r1', 'f', (6, 'R'), ('h_prev', 'rate', 'decay', 'nu', 'tau', 'times'), 2),
+    ('ni', 'i', (3, 'N'), ('anchor_on', 'c_plane', 'c_stick'), 3),
+    ('ei', 'i', (7, 'E'), ('seg_a', 'seg_b', 'seg_rod', 'seg_k', 'seg_ne', 'seg_closed',
+                          'excluded'), 0),
+    ('ri', 'i', (6, 'R'), ('node0', 'elem0', 'vor0', 'ne', 'closed', 'group'), 0),
+    ('pair_state', 'i', (4,), None, 1),
+    ('stats', 'f', ('R', 5), None, 0),
+    ('el_K', 'f', ('E', 3, 3, 3), None, 0),
+    ('status', 'i', ('R', 3), None, 0),
+    ('segs', 'i', ('S',), None, 0),
+    ('nodes', 'i', ('M',), None, 0),
 )
-ROD_MODEL = (
-    ("node0", "i", ("R",)), ("elem0", "i", ("R",)), ("vor0", "i", ("R",)), ("ne", "i", ("R",)),
-    ("closed", "i", ("R",)), ("group", "i", ("R",)),
-    ("decay", "f", ("R",)), ("nu", "f", ("R",)), ("tau", "f", ("R",)),
-    ("mass", "f", ("N",)), ("node_radius", "f", ("N",)), ("node_kmin", "f", ("N",)),
-    ("J", "f", ("E", 3)), ("inv_J", "f", ("E", 3)), ("S", "f", ("E", 3)), ("rest_len", "f", ("E",)),
-    ("rest_sigma", "f", ("E", 3)), ("B", "f", ("V", 3)), ("rest_vor", "f", ("V",)),
-    ("rest_kappa", "f", ("V", 3)),
-    # Segments (capsules) for rod-rod contact: nodes, rod, index along it, size, closed,
-    # excluded neighbours, radius; the real segments and nodes (no ghosts).
-    ("seg_a", "i", ("E",)), ("seg_b", "i", ("E",)), ("seg_rod", "i", ("E",)),
-    ("seg_k", "i", ("E",)), ("seg_ne", "i", ("E",)), ("seg_closed", "i", ("E",)),
-    ("excluded", "i", ("E",)), ("seg_radius", "f", ("E",)), ("segs", "i", ("S",)),
-    ("nodes", "i", ("M",)),
-)
-ROD_CONTROL = (("fext", "f", ("N", 3)), ("text", "f", ("E", 3)))
-ROD_WORK = (
-    ("force", "f", ("N", 3)), ("contact_force", "f", ("N", 3)), ("torque", "f", ("E", 3)),
-    ("dil", "f", ("E",)), ("stress", "f", ("E", 3)), ("kappa", "f", ("V", 3)),
-    ("couple", "f", ("V", 3)), ("scr_C", "f", ("V", 3)), ("scr_X", "f", ("V", 3)),
-    ("scr_edot", "f", ("E",)), ("el_K", "f", ("E", 3, 3, 3)), ("xp", "f", ("N", 3)),
-    ("vp", "f", ("N", 3)), ("extra", "f", ("N", 3)), ("stats", "f", ("R", 5)),
-    ("status", "i", ("R", 3)), ("times", "f", ("R",)),
-)
+# Row indices of the stacked rod fields.
+(N_POS, N_VEL, N_XN, N_VN, N_FN_EL, N_ANCHOR, N_C_DIR, N_REF, N_FEXT, N_FORCE, N_CONTACT_FORCE,
+ N_XP, N_VP, N_EXTRA) = range(14)
+E_OMEGA, E_WN, E_TN_EL, E_J, E_INV_J, E_S, E_REST_SIGMA, E_TEXT, E_TORQUE, E_STRESS = range(10)
+E_Q, E_QN = 0, 1
+V_B, V_REST_KAPPA, V_KAPPA, V_COUPLE, V_SCR_C, V_SCR_X = 0, 1, 2, 3, 4, 5
+N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2
+E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3
+V_REST_VOR = 0
+R_H_PREV, R_RATE, R_DECAY, R_NU, R_TAU, R_TIMES = 0, 1, 2, 3, 4, 5
+N_ANCHOR_ON, N_C_PLANE, N_C_STICK = 0, 1, 2
+E_SEG_A, E_SEG_B, E_SEG_ROD, E_SEG_K, E_SEG_NE, E_SEG_CLOSED, E_EXCLUDED = 0, 1, 2, 3, 4, 5, 6
+R_NODE0, R_ELEM0, R_VOR0, R_NE, R_CLOSED, R_GROUP = 0, 1, 2, 3, 4, 5
 ENV = (
     # Clamps: rod ranges, clamped node / element, driver, offset in the driver frame (m),
     # rotation from the driver frame to the element's material frame (world-from-local).
-    ("rod_pcon", "i", ("R1",)), ("rod_fcon", "i", ("R1",)), ("pcon_node", "i", ("P",)),
-    ("pcon_drv", "i", ("P",)), ("pcon_off", "f", ("P", 3)), ("fcon_elem", "i", ("F",)),
-    ("fcon_drv", "i", ("F",)), ("fcon_rel", "f", ("F", 3, 3)),
-    ("planes", "f", ("L", 11)),
+    ("rod_pcon", "i", ("R1",), None, 0),
+    ("rod_fcon", "i", ("R1",), None, 0),
+    ("pcon_node", "i", ("P",), None, 0),
+    ("pcon_drv", "i", ("P",), None, 0),
+    ("pcon_off", "f", ("P", 3), None, 0),
+    ("fcon_elem", "i", ("F",), None, 0),
+    ("fcon_drv", "i", ("F",), None, 0),
+    ("fcon_rel", "f", ("F", 3, 3), None, 0),
+    ("planes", "f", ("L", 11), None, 0),
     # Drivers as each rod sees them during a call (rods run their steps independently),
     # the last step's reaction (force, torque about the driver's origin; world) and the
     # impulse since reset, per rod.
-    ("dloc", "f", ("R", "D", 24)), ("dreact", "f", ("R", "D", 6)), ("dimp", "f", ("R", "D", 6)),
+    ("dloc", "f", ("R", "D", 24), None, 0),
+    ("dreact", "f", ("R", "D", 6), None, 0),
+    ("dimp", "f", ("R", "D", 6), None, 0),
 )
 COLS_STATE = (
-    ("qc_meta", "i", ("Q", 5)), ("qc_geo", "f", ("Q", 7)), ("qc_tris", "i", ("Q", 32)),
-    ("qc_dist", "f", ("Q", 32)), ("anchor", "f", ("Q", 4)), ("anchor_id", "i", ("Q",)),
+    ("qc_meta", "i", ("Q", 5), None, 0),
+    ("qc_geo", "f", ("Q", 7), None, 0),
+    ("qc_tris", "i", ("Q", 32), None, 0),
+    ("qc_dist", "f", ("Q", 32), None, 0),
+    ("anchor", "f", ("Q", 4), None, 0),
+    ("anchor_id", "i", ("Q",), None, 0),
 )
 COLS = (
-    ("kind", "i", ("C",)), ("drv", "i", ("C",)), ("par", "f", ("C", 12)), ("rng", "i", ("C", 6)),
-    ("allowed", "i", ("R", "C")), ("pose", "f", ("R", "C", 4, 4)), ("twist", "f", ("R", "C", 6)),
-    ("MV", "f", ("nv", 3)), ("MF", "i", ("nf", 3)), ("Blo", "f", ("nb", 3)), ("Bhi", "f", ("nb", 3)),
-    ("Bleft", "i", ("nb",)), ("Bright", "i", ("nb",)), ("Bstart", "i", ("nb",)),
-    ("Bcount", "i", ("nb",)), ("Border", "i", ("nf",)), ("Fn", "f", ("nf", 3)),
-    ("En", "f", ("nf", 3, 3)), ("Vn", "f", ("nv", 3)), ("Fg", "f", ("nf", 3, 4)),
-    ("tr_stack", "i", ("R", 64)), ("tr_bound", "f", ("R", 64)), ("pen", "f", ("N", "C")),
-    ("wrench", "f", ("R", "C", 6)),
+    ("kind", "i", ("C",), None, 0),
+    ("drv", "i", ("C",), None, 0),
+    ("par", "f", ("C", 12), None, 0),
+    ("rng", "i", ("C", 6), None, 0),
+    ("allowed", "i", ("R", "C"), None, 0),
+    ("pose", "f", ("R", "C", 4, 4), None, 0),
+    ("twist", "f", ("R", "C", 6), None, 0),
+    ("MV", "f", ("nv", 3), None, 0),
+    ("MF", "i", ("nf", 3), None, 0),
+    ("Blo", "f", ("nb", 3), None, 0),
+    ("Bhi", "f", ("nb", 3), None, 0),
+    ("Bleft", "i", ("nb",), None, 0),
+    ("Bright", "i", ("nb",), None, 0),
+    ("Bstart", "i", ("nb",), None, 0),
+    ("Bcount", "i", ("nb",), None, 0),
+    ("Border", "i", ("nf",), None, 0),
+    ("Fn", "f", ("nf", 3), None, 0),
+    ("En", "f", ("nf", 3, 3), None, 0),
+    ("Vn", "f", ("nv", 3), None, 0),
+    ("Fg", "f", ("nf", 3, 4), None, 0),
+    ("tr_stack", "i", ("R", 64), None, 0),
+    ("tr_bound", "f", ("R", 64), None, 0),
+    ("pen", "f", ("N", "C"), None, 0),
+    ("wrench", "f", ("R", "C", 6), None, 0),
 )
-GROUPS = {"rods": ROD_STATE + ROD_MODEL + ROD_CONTROL + ROD_WORK, "env": ENV,
-          "cols": COLS_STATE + COLS}
+COLS_STATE = tuple((n, k, s, r, 1) for n, k, s, r, _ in COLS_STATE)  # all of them state
+GROUPS = {"rods": ROD_ARRAYS, "env": ENV, "cols": COLS_STATE + COLS}
 
-STATE_FIELDS = {"rods": len(ROD_STATE), "env": 0, "cols": len(COLS_STATE)}
-
-RodState = namedtuple("RodState", [f[0] for f in ROD_STATE])
-RodModel = namedtuple("RodModel", [f[0] for f in ROD_MODEL])
-RodControl = namedtuple("RodControl", [f[0] for f in ROD_CONTROL])
-RodWork = namedtuple("RodWork", [f[0] for f in ROD_WORK])
+Rods = namedtuple("Rods", [f[0] for f in ROD_ARRAYS])
 Env = namedtuple("Env", [f[0] for f in ENV])
 Colliders = namedtuple("Colliders", [f[0] for f in COLS_STATE + COLS])
 
@@ -137,31 +165,13 @@ def _layout(I):
     return I[1:1 + 5 * n].reshape((n, 5))
 
 
-@njit(cache=True, inline="always")
-def _s(buf, L, k):
-    o = L[k, 0]
-    return buf[o:o + L[k, 1]]
-
-
 @njit(cache=True)
-def carve_rods(F, I, F3):
-    """(state, model, control, work) of the rods group: its (n, 3) float fields are slices of
-    ``F3`` (slicing is ~7x cheaper than reshaping, and this runs on every call)."""
+def carve_rods(F, I):
+    """The rods group's arrays (see ``ROD_ARRAYS``)."""
     L = _layout(I)
-    state = RodState(_s(F3, L, 0), _s(F3, L, 1), _f3(F, L, 2), _s(F3, L, 3), _s(F3, L, 4),
-        _s(F3, L, 5), _f3(F, L, 6), _s(F3, L, 7), _s(F3, L, 8), _s(F3, L, 9), _s(F3, L, 10),
-        _s(F3, L, 11), _s(F, L, 12), _s(F, L, 13), _s(I, L, 14), _s(I, L, 15), _s(I, L, 16),
-        _s(F3, L, 17), _s(I, L, 18))
-    model = RodModel(_s(I, L, 19), _s(I, L, 20), _s(I, L, 21), _s(I, L, 22), _s(I, L, 23), _s(I,
-        L, 24), _s(F, L, 25), _s(F, L, 26), _s(F, L, 27), _s(F, L, 28), _s(F, L, 29), _s(F, L,
-        30), _s(F3, L, 31), _s(F3, L, 32), _s(F3, L, 33), _s(F, L, 34), _s(F3, L, 35), _s(F3, L,
-        36), _s(F, L, 37), _s(F3, L, 38), _s(I, L, 39), _s(I, L, 40), _s(I, L, 41), _s(I, L,
-        42), _s(I, L, 43), _s(I, L, 44), _s(I, L, 45), _s(F, L, 46), _s(I, L, 47), _s(I, L, 48))
-    control = RodControl(_s(F3, L, 49), _s(F3, L, 50))
-    work = RodWork(_s(F3, L, 51), _s(F3, L, 52), _s(F3, L, 53), _s(F, L, 54), _s(F3, L, 55),
-        _s(F3, L, 56), _s(F3, L, 57), _s(F3, L, 58), _s(F3, L, 59), _s(F, L, 60), _f4(F, L, 61),
-        _s(F3, L, 62), _s(F3, L, 63), _s(F3, L, 64), _f2(F, L, 65), _f2(I, L, 66), _s(F, L, 67))
-    return state, model, control, work
+    return Rods(_f3(F, L, 0), _f3(F, L, 1), _f4(F, L, 2), _f3(F, L, 3), _f2(F, L, 4), _f2(F, L,
+                5), _f2(F, L, 6), _f2(F, L, 7), _f2(I, L, 8), _f2(I, L, 9), _f2(I, L, 10), _f(I,
+                L, 11), _f2(F, L, 12), _f4(F, L, 13), _f2(I, L, 14), _f(I, L, 15), _f(I, L, 16))
 
 
 @njit(cache=True)

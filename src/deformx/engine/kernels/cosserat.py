@@ -13,6 +13,33 @@ import math
 from numba import njit
 
 from .so3 import relative_rotation_vector
+from .bundles import (
+    E_DIL,
+    E_J,
+    E_OMEGA,
+    E_Q,
+    E_REST_LEN,
+    E_REST_SIGMA,
+    E_S,
+    E_SCR_EDOT,
+    E_STRESS,
+    E_TORQUE,
+    N_FORCE,
+    N_POS,
+    N_VEL,
+    R_CLOSED,
+    R_ELEM0,
+    R_NE,
+    R_NODE0,
+    R_VOR0,
+    V_B,
+    V_COUPLE,
+    V_KAPPA,
+    V_REST_KAPPA,
+    V_REST_VOR,
+    V_SCR_C,
+    V_SCR_X,
+)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -27,20 +54,20 @@ def rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed):
 
 
 @njit(cache=True, error_model="numpy")
-def rod_internal_loads(r: int, st, md, wk) -> None:
+def rod_internal_loads(r: int, rd) -> None:
     """Write internal forces (lab, N) and torques (material, N m) of rod ``r`` (bundles:
-    state ``st``, model ``md``, work ``wk``; see :mod:`.bundles`).
+    the rods' arrays ``rd``, see :mod:`.bundles`).
 
     ``force``/``torque`` are overwritten on the rod's nodes/elements. ``dil`` (element
     dilatation), ``kappa`` (Voronoi curvature), ``stress`` and ``couple`` (material-frame
     resultants) are left for diagnostics and divergence checks.
     """
-    pos, vel, Q, omega = st.pos, st.vel, st.Q, st.omega
-    J, S, rest_len, rest_sigma, B = md.J, md.S, md.rest_len, md.rest_sigma, md.B
-    rest_vor, rest_kappa = md.rest_vor, md.rest_kappa
-    force, torque, dil, kappa, stress = wk.force, wk.torque, wk.dil, wk.kappa, wk.stress
-    couple, scr_C, scr_X, scr_edot = wk.couple, wk.scr_C, wk.scr_X, wk.scr_edot
-    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, md.node0, md.elem0, md.vor0, md.ne, md.closed)
+    pos, vel, Q, omega = rd.n3[N_POS], rd.n3[N_VEL], rd.e33[E_Q], rd.e3[E_OMEGA]
+    J, S, rest_len, rest_sigma, B = rd.e3[E_J], rd.e3[E_S], rd.e1[E_REST_LEN], rd.e3[E_REST_SIGMA], rd.v3[V_B]
+    rest_vor, rest_kappa = rd.v1[V_REST_VOR], rd.v3[V_REST_KAPPA]
+    force, torque, dil, kappa, stress = rd.n3[N_FORCE], rd.e3[E_TORQUE], rd.e1[E_DIL], rd.v3[V_KAPPA], rd.e3[E_STRESS]
+    couple, scr_C, scr_X, scr_edot = rd.v3[V_COUPLE], rd.v3[V_SCR_C], rd.v3[V_SCR_X], rd.e1[E_SCR_EDOT]
+    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rd.ri[R_NODE0], rd.ri[R_ELEM0], rd.ri[R_VOR0], rd.ri[R_NE], rd.ri[R_CLOSED])
 
     # Stretch / shear: element strain, stress, and the lab-frame stress Q^T n / e.
     p0 = p1 = p2 = 0.0  # lab-frame stress of the element before

@@ -16,32 +16,34 @@ from __future__ import annotations
 from numba import njit
 
 from ..contact.rodrod import build_pairs, max_displacement, pair_forces
-from .bundles import SIM_DT, SIM_RR, SIM_SKIN
+from .bundles import (
+    N_EXTRA, N_POS, N_REF, N_VEL, N_VP, N_XP, R_NE, R_TIMES, SIM_DT, SIM_RR, SIM_SKIN,
+)
 from .implicit import advance_rod_implicit
 from .refcount import NO_REFCOUNT
 from .verlet import OK, advance_rod
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def _step_rods(t, sim, st, md, ct, wk, env, cols, first, last):
-    """One explicit step of every rod with the rod-rod forces ``wk.extra``; returns the first
+def _step_rods(t, sim, rd, env, cols, first, last):
+    """One explicit step of every rod with the rod-rod forces ``rd.n3[N_EXTRA]``; returns the first
     rod that diverged, or -1. A function of its own, without reference counting (see
     :mod:`.refcount`)."""
-    for r in range(md.ne.shape[0]):
-        wk.times[r] = advance_rod(r, 1, t, sim, st, md, ct, wk, env, cols, env.dloc[r], True,
+    for r in range(rd.ri[R_NE].shape[0]):
+        rd.r1[R_TIMES][r] = advance_rod(r, 1, t, sim, rd, env, cols, env.dloc[r], True,
                                   not first, not last)
-        if wk.status[r, 0] != OK:
+        if rd.status[r, 0] != OK:
             return r
     return -1
 
 
 @njit(cache=True, error_model="numpy")
-def _refresh_pairs(pos, pos2, skin, force_build, st, md, pairs):
+def _refresh_pairs(pos, pos2, skin, force_build, rd, pairs):
     """Rebuild the candidate pairs when needed; returns the (possibly grown) pair array."""
-    state, ref, nodes = st.pair_state, st.ref, md.nodes
+    state, ref, nodes = rd.pair_state, rd.n3[N_REF], rd.nodes
     if force_build or state[1] == 0 or max(max_displacement(pos, ref, nodes),
                                            max_displacement(pos2, ref, nodes)) > 0.5 * skin:
-        pairs, n = build_pairs(md, pos, pos2, skin, pairs)
+        pairs, n = build_pairs(rd, pos, pos2, skin, pairs)
         state[0] = n
         state[1] = 1
         state[2] += 1
@@ -52,53 +54,53 @@ def _refresh_pairs(pos, pos2, skin, force_build, st, md, pairs):
 
 
 @njit(cache=True, error_model="numpy")
-def advance_world_verlet(n_steps, t, sim, st, md, ct, wk, env, cols, pairs):
+def advance_world_verlet(n_steps, t, sim, rd, env, cols, pairs):
     """Advance all rods ``n_steps`` explicit steps with rod-rod contact; returns the pairs."""
     dt = sim[SIM_DT]
     h = 0.5 * dt
-    pos, vel, xp, extra, nodes = st.pos, st.vel, wk.xp, wk.extra, md.nodes
+    pos, vel, xp, extra, nodes = rd.n3[N_POS], rd.n3[N_VEL], rd.n3[N_XP], rd.n3[N_EXTRA], rd.nodes
     for step in range(n_steps):
         # Mid-step positions: after the first step the rods are left there (see advance_rod).
         drift = h if step == 0 else 0.0
         for i in nodes:
             for d in range(3):
                 xp[i, d] = pos[i, d] + drift * vel[i, d]
-        pairs = _refresh_pairs(xp, xp, sim[SIM_SKIN], False, st, md, pairs)
+        pairs = _refresh_pairs(xp, xp, sim[SIM_SKIN], False, rd, pairs)
         for i in nodes:
             for d in range(3):
                 extra[i, d] = 0.0
-        st.pair_state[3] = pair_forces(pairs, st.pair_state[0], md, xp, vel, dt,
+        rd.pair_state[3] = pair_forces(pairs, rd.pair_state[0], rd, xp, vel, dt,
                                        sim[SIM_RR:SIM_RR + 3], extra)
-        bad = _step_rods(t, sim, st, md, ct, wk, env, cols, step == 0, step == n_steps - 1)
+        bad = _step_rods(t, sim, rd, env, cols, step == 0, step == n_steps - 1)
         if bad >= 0:
-            wk.status[bad, 2] = step
+            rd.status[bad, 2] = step
             return pairs
-        t = wk.times[0]
-    for r in range(md.ne.shape[0]):
-        wk.status[r, 2] = n_steps
+        t = rd.r1[R_TIMES][0]
+    for r in range(rd.ri[R_NE].shape[0]):
+        rd.status[r, 2] = n_steps
     return pairs
 
 
 @njit(cache=True, error_model="numpy")
-def advance_world_implicit(n_steps, t, sim, opts, st, md, ct, wk, env, cols, pairs):
+def advance_world_implicit(n_steps, t, sim, opts, rd, env, cols, pairs):
     """Advance all rods ``n_steps`` stable steps with rod-rod contact; returns the pairs."""
     dt = sim[SIM_DT]
-    pos, vel, xp, vp, nodes = st.pos, st.vel, wk.xp, wk.vp, md.nodes
-    n_rods = md.ne.shape[0]
+    pos, vel, xp, vp, nodes = rd.n3[N_POS], rd.n3[N_VEL], rd.n3[N_XP], rd.n3[N_VP], rd.nodes
+    n_rods = rd.ri[R_NE].shape[0]
     for step in range(n_steps):
         for i in nodes:
             for d in range(3):
                 xp[i, d] = pos[i, d] + dt * vel[i, d]
                 vp[i, d] = vel[i, d]
         # The boxes span the step's start and predicted end: the Newton iterates lie between.
-        pairs = _refresh_pairs(pos, xp, sim[SIM_SKIN], True, st, md, pairs)
+        pairs = _refresh_pairs(pos, xp, sim[SIM_SKIN], True, rd, pairs)
         for r in range(n_rods):
-            wk.times[r] = advance_rod_implicit(r, 1, t, sim, opts, st, md, ct, wk, env, cols,
-                                               env.dloc[r], pairs, st.pair_state[0])
-            if wk.status[r, 0] != OK:
-                wk.status[r, 2] = step
+            rd.r1[R_TIMES][r] = advance_rod_implicit(r, 1, t, sim, opts, rd, env, cols,
+                                               env.dloc[r], pairs, rd.pair_state[0])
+            if rd.status[r, 0] != OK:
+                rd.status[r, 2] = step
                 return pairs
-        t = wk.times[0]
+        t = rd.r1[R_TIMES][0]
     for r in range(n_rods):
-        wk.status[r, 2] = n_steps
+        rd.status[r, 2] = n_steps
     return pairs

@@ -33,7 +33,13 @@ from ..contact.segments import rod_collider_contacts
 from .banded import BLOCK_BAND, add_lower, block_cholesky, block_solve, store_block
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
-from .bundles import OPT_ITER, SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_RR, SIM_TOL
+from .bundles import (
+    E_DIL, E_J, E_OMEGA, E_Q, E_QN, E_REST_LEN, E_S, E_SEG_ROD, E_STRESS, E_TEXT, E_TN_EL,
+    E_TORQUE, E_WN, N_ANCHOR, N_ANCHOR_ON, N_CONTACT_FORCE, N_C_DIR, N_C_PLANE, N_C_STICK,
+    N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS, N_POS, N_VEL, N_VN, N_XN,
+    OPT_ITER, R_CLOSED, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU, R_TIMES, R_VOR0,
+    SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_RR, SIM_TOL, V_B, V_KAPPA, V_REST_VOR,
+)
 from .drivers import (
     add_frame_reaction,
     add_impulse,
@@ -98,7 +104,7 @@ def _rtbr(R, i, m, b0, b1, b2):
 
 
 @njit(cache=True, error_model="numpy")
-def _assemble(h, ext, st, md, wk, nu, kv, geometric, A):
+def _assemble(h, ext, rd, nu, kv, geometric, A):
     """Newton matrix of one rod (extent ``ext``, see ``rod_extent``) into ``A`` (block band);
     returns the number of block rows.
 
@@ -113,8 +119,8 @@ def _assemble(h, ext, st, md, wk, nu, kv, geometric, A):
     The sums are formed in the same order as by accumulating each term into a zeroed band.
     """
     n0, e0, v0, ne, nn, _, closed = ext
-    pos, Q, dil, stress = st.pos, st.Q, wk.dil, wk.stress
-    S, rest_len, B, rest_vor, mass, J = md.S, md.rest_len, md.B, md.rest_vor, md.mass, md.J
+    pos, Q, dil, stress = rd.n3[N_POS], rd.e33[E_Q], rd.e1[E_DIL], rd.e3[E_STRESS]
+    S, rest_len, B, rest_vor, mass, J = rd.e3[E_S], rd.e1[E_REST_LEN], rd.v3[V_B], rd.v1[V_REST_VOR], rd.n1[N_MASS], rd.e3[E_J]
     nb = 2 * ne + (0 if closed else 1)
     zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     store_block(A, 0, 1, zero)  # blocks before the first column: unused
@@ -235,7 +241,7 @@ def _plane_gap(planes, p, pos, g, radius):
 
 
 @njit(cache=True, error_model="numpy")
-def _contacts(phase, n0, nn, h, planes, st, md, wk, A, add_forces) -> int:
+def _contacts(phase, n0, nn, h, planes, rd, A, add_forces) -> int:
     """Implicit plane contact of one rod with a fixed active set per Newton solve.
 
     Normal force ``-k gap - c v_n``. A sticking node is held by a spring of stiffness k to its
@@ -249,9 +255,9 @@ def _contacts(phase, n0, nn, h, planes, st, md, wk, A, add_forces) -> int:
     phase PREDICT: choose the set at the predictor; ITERATE: add forces (``add_forces``) or
     stiffness (into ``A``); CHECK: correct the set; FINISH: store contact forces and anchors.
     """
-    pos, xn, anchor, anchor_on, c_plane = st.pos, st.xn, st.anchor, st.anchor_on, st.c_plane
-    c_stick, c_dir, mass, node_radius, node_kmin = st.c_stick, st.c_dir, md.mass, md.node_radius, md.node_kmin
-    force, contact_force = wk.force, wk.contact_force
+    pos, xn, anchor, anchor_on, c_plane = rd.n3[N_POS], rd.n3[N_XN], rd.n3[N_ANCHOR], rd.ni[N_ANCHOR_ON], rd.ni[N_C_PLANE]
+    c_stick, c_dir, mass, node_radius, node_kmin = rd.ni[N_C_STICK], rd.n3[N_C_DIR], rd.n1[N_MASS], rd.n1[N_NODE_RADIUS], rd.n1[N_NODE_KMIN]
+    force, contact_force = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE]
     changes = 0
     for i in range(nn):
         g = n0 + i
@@ -368,14 +374,14 @@ def _contacts(phase, n0, nn, h, planes, st, md, wk, A, add_forces) -> int:
 
 
 @njit(cache=True, error_model="numpy")
-def _more_contacts(r, ext, h, st, md, wk, cols, pairs, n_pairs, rr, clear, commit):
+def _more_contacts(r, ext, h, rd, cols, pairs, n_pairs, rr, clear, commit):
     """Mesh, primitive and rod-rod contact forces of the iterate, and their stiffness.
 
     ``clear`` zeroes ``contact_force`` first (when no plane pass has written it); ``commit``
     (accepted step) stores the friction anchors and the reactions.
     """
     n0, e0, _, ne, nn, _, _ = ext
-    contact_force, el_K = wk.contact_force, wk.el_K
+    contact_force, el_K = rd.n3[N_CONTACT_FORCE], rd.el_K
     if clear:
         for i in range(n0, n0 + nn):
             for d in range(3):
@@ -388,10 +394,10 @@ def _more_contacts(r, ext, h, st, md, wk, cols, pairs, n_pairs, rr, clear, commi
     # As stiff as the explicit integrator's contact at dt <= 1e-4 s (as for planes).
     dt_ref = min(h, 1e-4)
     if cols is not None:
-        rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, st.pos, st.vel, st.xn, md, wk,
+        rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, rd.n3[N_POS], rd.n3[N_VEL], rd.n3[N_XN], rd,
                               cols, commit, True)
     if n_pairs > 0:
-        rod_pair_forces(r, pairs, n_pairs, st, md, wk, dt_ref, h, rr, True)
+        rod_pair_forces(r, pairs, n_pairs, rd, dt_ref, h, rr, True)
 
 
 @njit(cache=True, error_model="numpy")
@@ -429,7 +435,7 @@ def _implied_rates(n0, nn, e0, ne, inv_h, pos, xn, Q, Qn, vel, omega):
 
 
 @njit(cache=True, error_model="numpy")
-def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl, pairs, n_pairs):
+def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_pairs):
     """Advance rod ``r`` by ``n_steps`` backward-Euler steps of ``dt``; returns the new time.
 
     ``rod_nu`` is the uniform damping rate (1/s), ``rod_tau`` the Kelvin-Voigt retardation
@@ -444,17 +450,17 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
     gravity = sim[SIM_G:SIM_G + 3]
     max_strain, tol, max_iter = sim[SIM_MAX_STRAIN], sim[SIM_TOL], opts[OPT_ITER]
     rr = sim[SIM_RR:SIM_RR + 3]
-    rod_nu, rod_tau = md.nu, md.tau
-    pos, vel, Q, omega = st.pos, st.vel, st.Q, st.omega
-    xn, vn, Qn, wn, fn_el, tn_el = st.xn, st.vn, st.Qn, st.wn, st.fn_el, st.tn_el
-    anchor_on, h_prev, rate = st.anchor_on, st.h_prev, st.rate
-    mass, J, rest_len, rest_vor = md.mass, md.J, md.rest_len, md.rest_vor
-    seg_rod, fext, text = md.seg_rod, ct.fext, ct.text
-    force, torque, dil, kappa = wk.force, wk.torque, wk.dil, wk.kappa
-    el_K, stats, status = wk.el_K, wk.stats, wk.status
+    rod_nu, rod_tau = rd.r1[R_NU], rd.r1[R_TAU]
+    pos, vel, Q, omega = rd.n3[N_POS], rd.n3[N_VEL], rd.e33[E_Q], rd.e3[E_OMEGA]
+    xn, vn, Qn, wn, fn_el, tn_el = rd.n3[N_XN], rd.n3[N_VN], rd.e33[E_QN], rd.e3[E_WN], rd.n3[N_FN_EL], rd.e3[E_TN_EL]
+    anchor_on, h_prev, rate = rd.ni[N_ANCHOR_ON], rd.r1[R_H_PREV], rd.r1[R_RATE]
+    mass, J, rest_len, rest_vor = rd.n1[N_MASS], rd.e3[E_J], rd.e1[E_REST_LEN], rd.v1[V_REST_VOR]
+    seg_rod, fext, text = rd.ei[E_SEG_ROD], rd.n3[N_FEXT], rd.e3[E_TEXT]
+    force, torque, dil, kappa = rd.n3[N_FORCE], rd.e3[E_TORQUE], rd.e1[E_DIL], rd.v3[V_KAPPA]
+    el_K, stats, status = rd.el_K, rd.stats, rd.status
     planes = env.planes
     h = dt
-    ext = rod_extent(r, md.node0, md.elem0, md.vor0, md.ne, md.closed)
+    ext = rod_extent(r, rd.ri[R_NODE0], rd.ri[R_ELEM0], rd.ri[R_VOR0], rd.ri[R_NE], rd.ri[R_CLOSED])
     n0, e0, v0, ne, nn, nv, closed = ext
     c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
     f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
@@ -530,7 +536,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
         kv = 1.0 + tau / hs
         inv_hs = 1.0 / hs  # the per-node and per-element loops multiply
         if tau > 0.0:  # internal loads at the step start, for the viscous (rate) term
-            rod_internal_loads(r, st, md, wk)
+            rod_internal_loads(r, rd)
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     fn_el[i, d] = force[i, d]
@@ -548,7 +554,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
         if cols is not None:
             collider_poses(r, elapsed + hs, cols, dl)
         if has_planes:
-            _contacts(PREDICT, n0, nn, hs, planes, st, md, wk, no_band, False)
+            _contacts(PREDICT, n0, nn, hs, planes, rd, no_band, False)
         set_rounds = 0
         budget = max_iter
         step_scale = 1.0
@@ -563,7 +569,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
         _implied_rates(n0, nn, e0, ne, inv_hs, pos, xn, Q, Qn, vel, omega)
         while it < budget:
             it += 1
-            rod_internal_loads(r, st, md, wk)
+            rod_internal_loads(r, rd)
             failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
             if failed != OK:
                 break
@@ -578,9 +584,9 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
                 for d in range(3):
                     force[i, d] += mass[i] * gravity[d] + fext[i, d]
             if has_planes:
-                _contacts(ITERATE, n0, nn, hs, planes, st, md, wk, no_band, True)
+                _contacts(ITERATE, n0, nn, hs, planes, rd, no_band, True)
             if more_contacts:
-                _more_contacts(r, ext, hs, st, md, wk, cols, pairs, n_pairs, rr, not has_planes, False)
+                _more_contacts(r, ext, hs, rd, cols, pairs, n_pairs, rr, not has_planes, False)
             # Residual (negated): forces minus inertia and damping.
             for i in range(nn):
                 g = n0 + i
@@ -608,9 +614,9 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
             for geometric in (True, False):
                 if not refactor:
                     break
-                _assemble(hs, ext, st, md, wk, nu, kv, geometric, A)
+                _assemble(hs, ext, rd, nu, kv, geometric, A)
                 if has_planes:
-                    _contacts(ITERATE, n0, nn, hs, planes, st, md, wk, A, False)
+                    _contacts(ITERATE, n0, nn, hs, planes, rd, A, False)
                 if more_contacts:
                     _add_element_stiffness(A, e0, ne, nn, el_K)
                 for q in range(nb):
@@ -668,7 +674,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
             done_iterating = early or update <= tol * length_scale or it == budget
             if done_iterating:
                 if has_planes and set_rounds < MAX_SET_ROUNDS:
-                    if _contacts(CHECK, n0, nn, hs, planes, st, md, wk, no_band, False) > 0:
+                    if _contacts(CHECK, n0, nn, hs, planes, rd, no_band, False) > 0:
                         # The contact set changed: solve again with it (fresh matrix).
                         set_rounds += 1
                         budget = it + max_iter
@@ -701,9 +707,9 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols, dl
             return t
         # Accepted (velocities are the last iterate's): friction anchors and clamp rates.
         if has_planes:
-            _contacts(FINISH, n0, nn, hs, planes, st, md, wk, no_band, False)
+            _contacts(FINISH, n0, nn, hs, planes, rd, no_band, False)
         if more_contacts:
-            _more_contacts(r, ext, hs, st, md, wk, cols, pairs, n_pairs, rr, not has_planes, True)
+            _more_contacts(r, ext, hs, rd, cols, pairs, n_pairs, rr, not has_planes, True)
         if cols is not None:
             collider_impulses(r, hs, cols, env)
         clamp_rates(elapsed + hs, c0, c1, f0, f1, pos, vel, Q, omega, env, dl)
@@ -747,7 +753,7 @@ def _clamp_reactions(r, tau, n0, e0, c0, c1, f0, f1, pos, Q, rhs, env, dl) -> No
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, st, md, ct, wk, env, cols, drv,
+def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, rd, env, cols, drv,
                           load, pairs, n_pairs):
     """Advance rods ``r_begin .. r_end - 1``, each with its own copy of the drivers (loaded
     from ``drv`` first when ``load``); releases the GIL so threads can share rods."""
@@ -755,5 +761,5 @@ def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, st, md, ct, wk,
         dl = env.dloc[r]
         if load:
             copy_drivers(dl, drv)
-        wk.times[r] = advance_rod_implicit(r, n_steps, t, sim, opts, st, md, ct, wk, env, cols,
+        rd.r1[R_TIMES][r] = advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols,
                                            dl, pairs, n_pairs)

@@ -11,8 +11,8 @@ from __future__ import annotations
 from numba import njit
 
 from .bundles import (
-    OPT_COUPLED, OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, SIM_T, carve_cols, carve_env,
-    carve_rods,
+    OPT_COUPLED, OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, R_NE, R_TIMES, SIM_T, carve_cols,
+    carve_env, carve_rods,
 )
 from .coupled import advance_world_implicit, advance_world_verlet
 from .drivers import begin_step, copy_drivers, end_step
@@ -21,7 +21,7 @@ from .verlet import OK, advance_rods
 
 
 @njit(cache=True, error_model="numpy")
-def _finish(n_steps, opts, wk, env, drv):
+def _finish(n_steps, opts, rd, env, drv):
     """Drivers back from the rods' copies (or advanced alone without rods); the rod that
     failed first, or -1."""
     r0, r1 = opts[OPT_R0], opts[OPT_R1]
@@ -30,45 +30,45 @@ def _finish(n_steps, opts, wk, env, drv):
             copy_drivers(drv, env.dloc[r0])
     bad = -1
     for r in range(r0, r1):
-        if wk.status[r, 0] != OK and (bad < 0 or wk.status[r, 2] < wk.status[bad, 2]):
+        if rd.status[r, 0] != OK and (bad < 0 or rd.status[r, 2] < rd.status[bad, 2]):
             bad = r
     return bad
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def step_verlet(n_steps, sim, opts, RF, RI, RF3, EF, EI, CF, CI, drv, pairs):
+def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` explicit steps; returns (time, failed rod or -1, pairs)."""
-    st, md, ct, wk = carve_rods(RF, RI, RF3)
+    rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
     t = sim[SIM_T]
     if opts[OPT_COUPLED]:
-        for r in range(md.ne.shape[0]):
+        for r in range(rd.ri[R_NE].shape[0]):
             copy_drivers(env.dloc[r], drv)
-        pairs = advance_world_verlet(n_steps, t, sim, st, md, ct, wk, env, cols, pairs)
+        pairs = advance_world_verlet(n_steps, t, sim, rd, env, cols, pairs)
     else:
-        advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, st, md, ct, wk, env, cols, drv,
+        advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, rd, env, cols, drv,
                      opts[OPT_LOAD] != 0)
-    bad = _finish(n_steps, opts, wk, env, drv)
-    return wk.times[opts[OPT_R0]], bad, pairs
+    bad = _finish(n_steps, opts, rd, env, drv)
+    return rd.r1[R_TIMES][opts[OPT_R0]], bad, pairs
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def step_stable(n_steps, sim, opts, RF, RI, RF3, EF, EI, CF, CI, drv, pairs):
+def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` stable (backward-Euler) steps; returns (time, failed rod or -1, pairs)."""
-    st, md, ct, wk = carve_rods(RF, RI, RF3)
+    rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
     t = sim[SIM_T]
     if opts[OPT_COUPLED]:
-        for r in range(md.ne.shape[0]):
+        for r in range(rd.ri[R_NE].shape[0]):
             copy_drivers(env.dloc[r], drv)
-        pairs = advance_world_implicit(n_steps, t, sim, opts, st, md, ct, wk, env, cols, pairs)
+        pairs = advance_world_implicit(n_steps, t, sim, opts, rd, env, cols, pairs)
     else:
-        advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, opts, st, md, ct, wk,
+        advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, opts, rd,
                               env, cols, drv, opts[OPT_LOAD] != 0, pairs, 0)
-    bad = _finish(n_steps, opts, wk, env, drv)
-    return wk.times[opts[OPT_R0]], bad, pairs
+    bad = _finish(n_steps, opts, rd, env, drv)
+    return rd.r1[R_TIMES][opts[OPT_R0]], bad, pairs
 
 
 @njit(cache=True, error_model="numpy")

@@ -15,7 +15,11 @@ from numba import njit
 
 from ..contact.plane import plane_contact_node, plane_penalty
 from ..contact.segments import rod_collider_contacts
-from .bundles import D_W, SIM_DT, SIM_G, SIM_MAX_STRAIN
+from .bundles import (
+    D_W, E_DIL, E_INV_J, E_J, E_OMEGA, E_Q, E_TEXT, E_TORQUE, N_CONTACT_FORCE, N_EXTRA, N_FEXT,
+    N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS, N_POS, N_VEL, R_CLOSED, R_DECAY, R_ELEM0,
+    R_NE, R_NODE0, R_TIMES, R_VOR0, SIM_DT, SIM_G, SIM_MAX_STRAIN, V_KAPPA, V_REST_VOR,
+)
 from .cosserat import rod_extent, rod_internal_loads
 from .drivers import (
     add_frame_reaction,
@@ -68,16 +72,16 @@ def _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain):
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, use_extra, start_mid,
+def advance_rod(r, n_steps, t, sim, rd, env, cols, dl, use_extra, start_mid,
                 end_mid):
     """Advance rod ``r`` by ``n_steps`` steps from time ``t``; returns the new time.
 
-    ``st``, ``md``, ``ct``, ``wk``: the rods' state, model, control and work bundles; ``env``
+    ``rd``: the rods' arrays (state, model, loads, scratch; see :mod:`.bundles`); ``env``
     clamps, planes and driver reactions; ``cols`` the colliders (None without any); ``dl``
     the drivers as this rod sees them (advanced here, step by step). Contact: planes,
     colliders (friction anchors in ``cols``, reactions into ``cols.wrench[r]``) and, with
-    ``use_extra``, the node forces ``wk.extra`` (rod-rod contact, computed by the caller at
-    this step's mid-point). On divergence stops with ``wk.status[r]`` = (code, element,
+    ``use_extra``, the node forces ``rd.n3[N_EXTRA]`` (rod-rod contact, computed by the caller at
+    this step's mid-point). On divergence stops with ``rd.status[r]`` = (code, element,
     steps done).
 
     A caller stepping one step at a time (rod-rod contact) may leave the rod at the next
@@ -87,14 +91,14 @@ def advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, use_extra, st
     """
     dt = sim[SIM_DT]
     h = 0.5 * dt
-    pos, vel, Q, omega = st.pos, st.vel, st.Q, st.omega
-    mass, node_radius, node_kmin = md.mass, md.node_radius, md.node_kmin
-    force, contact_force, torque, dil = wk.force, wk.contact_force, wk.torque, wk.dil
-    fext, text, inv_J = ct.fext, ct.text, md.inv_J
-    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, md.node0, md.elem0, md.vor0, md.ne, md.closed)
+    pos, vel, Q, omega = rd.n3[N_POS], rd.n3[N_VEL], rd.e33[E_Q], rd.e3[E_OMEGA]
+    mass, node_radius, node_kmin = rd.n1[N_MASS], rd.n1[N_NODE_RADIUS], rd.n1[N_NODE_KMIN]
+    force, contact_force, torque, dil = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE], rd.e3[E_TORQUE], rd.e1[E_DIL]
+    fext, text, inv_J = rd.n3[N_FEXT], rd.e3[E_TEXT], rd.e3[E_INV_J]
+    n0, e0, v0, ne, nn, nv, closed = rod_extent(r, rd.ri[R_NODE0], rd.ri[R_ELEM0], rd.ri[R_VOR0], rd.ri[R_NE], rd.ri[R_CLOSED])
     c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
     f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
-    decay = md.decay[r]
+    decay = rd.r1[R_DECAY][r]
     g0, g1, g2 = sim[SIM_G], sim[SIM_G + 1], sim[SIM_G + 2]
     planes = env.planes
     n_planes = planes.shape[0]
@@ -114,7 +118,7 @@ def advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, use_extra, st
         t += h
         clamp_values(h, c0, c1, f0, f1, pos, Q, env, dl)
 
-        rod_internal_loads(r, st, md, wk)
+        rod_internal_loads(r, rd)
         for i in range(n0, n0 + nn):
             force[i, 0] += mass[i] * g0 + fext[i, 0]
             force[i, 1] += mass[i] * g1 + fext[i, 1]
@@ -131,25 +135,25 @@ def advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, use_extra, st
                                 contact_force)
             if cols is not None:
                 collider_poses(r, h, cols, dl)
-                rod_collider_contacts(r, n0, nn, e0, ne, dt, dt, pos, vel, pos, md, wk, cols,
+                rod_collider_contacts(r, n0, nn, e0, ne, dt, dt, pos, vel, pos, rd, cols,
                                       True, False)
                 collider_impulses(r, dt, cols, env)
             if use_extra:
-                extra = wk.extra
+                extra = rd.n3[N_EXTRA]
                 for i in range(n0, n0 + nn):
                     for j in range(3):
                         force[i, j] += extra[i, j]
                         contact_force[i, j] += extra[i, j]
 
-        code, k = _check(e0, ne, v0, nv, dil, wk.kappa, md.rest_vor, torque, sim[SIM_MAX_STRAIN])
+        code, k = _check(e0, ne, v0, nv, dil, rd.v3[V_KAPPA], rd.v1[V_REST_VOR], torque, sim[SIM_MAX_STRAIN])
         if code != OK:
-            wk.status[r, 0] = code
-            wk.status[r, 1] = k
-            wk.status[r, 2] = step
+            rd.status[r, 0] = code
+            rd.status[r, 1] = k
+            rd.status[r, 2] = step
             return t
 
         if clamped:
-            _clamp_reactions(r, h, dt, c0, c1, f0, f1, st, md, wk, env, dl)
+            _clamp_reactions(r, h, dt, c0, c1, f0, f1, rd, env, dl)
         for i in range(n0, n0 + nn):
             inv_m = 1.0 / mass[i]
             for j in range(3):
@@ -177,16 +181,16 @@ def advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, use_extra, st
         clamp_values(h, c0, c1, f0, f1, pos, Q, env, dl)
     else:
         clamp_values(0.0, c0, c1, f0, f1, pos, Q, env, dl)
-    wk.status[r, 2] = n_steps
+    rd.status[r, 2] = n_steps
     return t
 
 
 @njit(cache=True, error_model="numpy")
-def _clamp_reactions(r, tau, dt, c0, c1, f0, f1, st, md, wk, env, dl) -> None:
+def _clamp_reactions(r, tau, dt, c0, c1, f0, f1, rd, env, dl) -> None:
     """What the rod puts on its clamps' drivers this step: the total load on each clamped
     node and frame minus the part the clamp's prescribed motion uses up (explicit step:
     the constraint turns the free velocity update into the prescribed one)."""
-    pos, vel, Q, omega = st.pos, st.vel, st.Q, st.omega
+    pos, vel, Q, omega = rd.n3[N_POS], rd.n3[N_VEL], rd.e33[E_Q], rd.e3[E_OMEGA]
     clear_reactions(r, c0, c1, f0, f1, env)
     inv_dt = 1.0 / dt
     for c in range(c0, c1):
@@ -194,17 +198,17 @@ def _clamp_reactions(r, tau, dt, c0, c1, f0, f1, st, md, wk, env, dl) -> None:
         d = env.pcon_drv[c]
         p, _ = pose_at(dl, d, tau)
         v = clamp_rate(dl, d, pos[i, 0] - p[0], pos[i, 1] - p[1], pos[i, 2] - p[2])
-        m = md.mass[i]
+        m = rd.n1[N_MASS][i]
         add_node_reaction(r, d, tau, pos[i, 0], pos[i, 1], pos[i, 2],
-                          wk.force[i, 0] - m * (v[0] - vel[i, 0]) * inv_dt,
-                          wk.force[i, 1] - m * (v[1] - vel[i, 1]) * inv_dt,
-                          wk.force[i, 2] - m * (v[2] - vel[i, 2]) * inv_dt, env, dl)
+                          rd.n3[N_FORCE][i, 0] - m * (v[0] - vel[i, 0]) * inv_dt,
+                          rd.n3[N_FORCE][i, 1] - m * (v[1] - vel[i, 1]) * inv_dt,
+                          rd.n3[N_FORCE][i, 2] - m * (v[2] - vel[i, 2]) * inv_dt, env, dl)
     for c in range(f0, f1):
         e = env.fcon_elem[c]
         d = env.fcon_drv[c]
-        t0 = _frame_load(Q, e, 0, dl, d, omega, md.J, wk.torque, wk.dil, inv_dt)
-        t1 = _frame_load(Q, e, 1, dl, d, omega, md.J, wk.torque, wk.dil, inv_dt)
-        t2 = _frame_load(Q, e, 2, dl, d, omega, md.J, wk.torque, wk.dil, inv_dt)
+        t0 = _frame_load(Q, e, 0, dl, d, omega, rd.e3[E_J], rd.e3[E_TORQUE], rd.e1[E_DIL], inv_dt)
+        t1 = _frame_load(Q, e, 1, dl, d, omega, rd.e3[E_J], rd.e3[E_TORQUE], rd.e1[E_DIL], inv_dt)
+        t2 = _frame_load(Q, e, 2, dl, d, omega, rd.e3[E_J], rd.e3[E_TORQUE], rd.e1[E_DIL], inv_dt)
         add_frame_reaction(r, d, Q, e, t0, t1, t2, env)
     add_impulse(r, dt, c0, c1, f0, f1, env)
 
@@ -242,7 +246,7 @@ def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, forc
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def advance_rods(r_begin, r_end, n_steps, t, sim, st, md, ct, wk, env, cols, drv, load):
+def advance_rods(r_begin, r_end, n_steps, t, sim, rd, env, cols, drv, load):
     """Advance rods ``r_begin .. r_end - 1`` independently (no rod-rod contact), each with its
     own copy of the drivers (loaded from ``drv`` first when ``load``); releases the GIL so
     threads can share rods."""
@@ -250,5 +254,5 @@ def advance_rods(r_begin, r_end, n_steps, t, sim, st, md, ct, wk, env, cols, drv
         dl = env.dloc[r]
         if load:
             copy_drivers(dl, drv)
-        wk.times[r] = advance_rod(r, n_steps, t, sim, st, md, ct, wk, env, cols, dl, False,
+        rd.r1[R_TIMES][r] = advance_rod(r, n_steps, t, sim, rd, env, cols, dl, False,
                                   False, False)
