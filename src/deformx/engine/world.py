@@ -327,7 +327,7 @@ class World:
         cp = self._cols_p
         self._bufs = (rp.F, rp.I, self._env.F, self._env.I, None if cp is None else cp.F,
                       None if cp is None else cp.I)
-        self._kernel = step.step_verlet if self.integrator == "verlet" else step.step_stable
+        self._kernel = step.KERNELS[self.integrator, coupled]
         self._stale_env = False
 
     # ------------------------------------------------------------------ stepping

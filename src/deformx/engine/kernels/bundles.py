@@ -165,7 +165,7 @@ def _layout(I):
     return I[1:1 + 5 * n].reshape((n, 5))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def carve_rods(F, I):
     """The rods group's arrays (see ``ROD_ARRAYS``)."""
     L = _layout(I)
@@ -174,7 +174,7 @@ def carve_rods(F, I):
                 L, 11), _f2(F, L, 12), _f4(F, L, 13), _f2(I, L, 14), _f(I, L, 15), _f(I, L, 16))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def carve_env(F, I):
     L = _layout(I)
     return Env(_f(I, L, 0), _f(I, L, 1), _f(I, L, 2), _f(I, L, 3), _f2(F, L, 4), _f(I, L, 5),

@@ -95,6 +95,13 @@ def _rot(dl, d):
             dl[d, b + 6], dl[d, b + 7], dl[d, b + 8])
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def origin_at(dl, d, tau):
+    """Position of driver ``d``'s origin ``tau`` s into the step (no rotation needed)."""
+    return (dl[d, D_P] + tau * dl[d, D_V], dl[d, D_P + 1] + tau * dl[d, D_V + 1],
+            dl[d, D_P + 2] + tau * dl[d, D_V + 2])
+
+
 @njit(cache=True, error_model="numpy")
 def pose_at(dl, d, tau):
     """Position and rotation (row-major tuple) of driver ``d`` ``tau`` s into the step."""
@@ -122,7 +129,7 @@ def clamp_values(tau, c0, c1, f0, f1, pos, Q, env, dl) -> None:
                 Q[e, a, b] = R[3 * b] * rel[0, a] + R[3 * b + 1] * rel[1, a] + R[3 * b + 2] * rel[2, a]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def clamp_rate(dl, d, r0, r1, r2):
     """Velocity (m/s) of the point at world offset r from driver d's origin."""
     w0, w1, w2 = dl[d, D_W], dl[d, D_W + 1], dl[d, D_W + 2]
@@ -137,7 +144,7 @@ def clamp_rates(tau, c0, c1, f0, f1, pos, vel, Q, omega, env, dl) -> None:
     for c in range(c0, c1):
         i = env.pcon_node[c]
         d = env.pcon_drv[c]
-        p, _ = pose_at(dl, d, tau)
+        p = origin_at(dl, d, tau)
         v = clamp_rate(dl, d, pos[i, 0] - p[0], pos[i, 1] - p[1], pos[i, 2] - p[2])
         for j in range(3):
             vel[i, j] = v[j]
@@ -149,7 +156,7 @@ def clamp_rates(tau, c0, c1, f0, f1, pos, vel, Q, omega, env, dl) -> None:
                            + Q[e, j, 2] * dl[d, D_W + 2])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def clear_reactions(r, c0, c1, f0, f1, env) -> None:
     for c in range(c0, c1):
         for j in range(6):
@@ -159,11 +166,11 @@ def clear_reactions(r, c0, c1, f0, f1, env) -> None:
             env.dreact[r, env.fcon_drv[c], j] = 0.0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def add_node_reaction(r, d, tau, x0, x1, x2, f0, f1, f2, env, dl) -> None:
     """Force f (N, world) of the rod on driver d at point x, and its moment about the
     driver's origin at ``tau`` s into the step."""
-    p, _ = pose_at(dl, d, tau)
+    p = origin_at(dl, d, tau)
     r0, r1, r2 = x0 - p[0], x1 - p[1], x2 - p[2]
     env.dreact[r, d, 0] += f0
     env.dreact[r, d, 1] += f1
@@ -173,7 +180,7 @@ def add_node_reaction(r, d, tau, x0, x1, x2, f0, f1, f2, env, dl) -> None:
     env.dreact[r, d, 5] += r0 * f1 - r1 * f0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def add_frame_reaction(r, d, Q, e, t0, t1, t2, env) -> None:
     """Torque t (N m, material frame of element e) of the rod on driver d."""
     for j in range(3):
@@ -195,7 +202,7 @@ def add_impulse(r, h, c0, c1, f0, f1, env) -> None:
                 env.dimp[r, d, j] += h * env.dreact[r, d, j]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _seen(env, c0, c1, f0, f1, d) -> bool:
     """Whether driver d holds one of the node clamps c0..c1 or frame clamps f0..f1."""
     for c in range(c0, c1):

@@ -1,4 +1,4 @@
-"""Entry kernels: one call per ``World.step(n)``, one per integrator.
+"""Entry kernels: one call per ``World.step(n)``, one per integrator and coupling.
 
 They take only the world's buffers (a numba call costs ~0.1 us per array argument), carve
 them into bundles (:mod:`.bundles`), advance the rods (together when they touch each other,
@@ -11,7 +11,7 @@ from __future__ import annotations
 from numba import njit
 
 from .bundles import (
-    OPT_COUPLED, OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, R_NE, R_TIMES, SIM_T, carve_cols,
+    OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, R_NE, R_TIMES, SIM_T, carve_cols,
     carve_env, carve_rods,
 )
 from .coupled import advance_world_implicit, advance_world_verlet
@@ -20,7 +20,7 @@ from .implicit import advance_rods_implicit
 from .verlet import OK, advance_rods
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _finish(n_steps, opts, rd, env, drv):
     """Drivers back from the rods' copies (or advanced alone without rods); the rod that
     failed first, or -1."""
@@ -37,38 +37,55 @@ def _finish(n_steps, opts, rd, env, drv):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
-    """``n_steps`` explicit steps; returns (time, failed rod or -1, pairs)."""
+    """``n_steps`` explicit steps of rods that do not touch each other (each on its own, all
+    its steps at once); returns (time, failed rod or -1, pairs)."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
-    cols = carve_cols(CF, CI)
-    t = sim[SIM_T]
-    if opts[OPT_COUPLED]:
-        for r in range(rd.ri[R_NE].shape[0]):
-            copy_drivers(env.dloc[r], drv)
-        pairs = advance_world_verlet(n_steps, t, sim, rd, env, cols, pairs)
-    else:
-        advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, rd, env, cols, drv,
-                     opts[OPT_LOAD] != 0)
-    bad = _finish(n_steps, opts, rd, env, drv)
-    return rd.r1[R_TIMES][opts[OPT_R0]], bad, pairs
+    advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, rd, env,
+                 carve_cols(CF, CI), drv, opts[OPT_LOAD] != 0)
+    return rd.r1[R_TIMES][opts[OPT_R0]], _finish(n_steps, opts, rd, env, drv), pairs
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def step_verlet_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
+    """``n_steps`` explicit steps of rods that touch each other (all rods, one step at a
+    time); returns (time, failed rod or -1, pairs)."""
+    rd = carve_rods(RF, RI)
+    env = carve_env(EF, EI)
+    for r in range(rd.ri[R_NE].shape[0]):
+        copy_drivers(env.dloc[r], drv)
+    pairs = advance_world_verlet(n_steps, sim[SIM_T], sim, rd, env, carve_cols(CF, CI), pairs)
+    return rd.r1[R_TIMES][0], _finish(n_steps, opts, rd, env, drv), pairs
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
-    """``n_steps`` stable (backward-Euler) steps; returns (time, failed rod or -1, pairs)."""
+    """``n_steps`` stable (backward-Euler) steps of rods that do not touch each other;
+    returns (time, failed rod or -1, pairs)."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
-    cols = carve_cols(CF, CI)
-    t = sim[SIM_T]
-    if opts[OPT_COUPLED]:
-        for r in range(rd.ri[R_NE].shape[0]):
-            copy_drivers(env.dloc[r], drv)
-        pairs = advance_world_implicit(n_steps, t, sim, opts, rd, env, cols, pairs)
-    else:
-        advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, t, sim, opts, rd,
-                              env, cols, drv, opts[OPT_LOAD] != 0, pairs, 0)
-    bad = _finish(n_steps, opts, rd, env, drv)
-    return rd.r1[R_TIMES][opts[OPT_R0]], bad, pairs
+    advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, opts, rd, env,
+                          carve_cols(CF, CI), drv, opts[OPT_LOAD] != 0, pairs, 0)
+    return rd.r1[R_TIMES][opts[OPT_R0]], _finish(n_steps, opts, rd, env, drv), pairs
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def step_stable_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
+    """``n_steps`` stable steps of rods that touch each other; returns (time, failed rod or
+    -1, pairs)."""
+    rd = carve_rods(RF, RI)
+    env = carve_env(EF, EI)
+    for r in range(rd.ri[R_NE].shape[0]):
+        copy_drivers(env.dloc[r], drv)
+    pairs = advance_world_implicit(n_steps, sim[SIM_T], sim, opts, rd, env, carve_cols(CF, CI),
+                                   pairs)
+    return rd.r1[R_TIMES][0], _finish(n_steps, opts, rd, env, drv), pairs
+
+
+# (integrator, rods touch each other) -> entry kernel. A world compiles only the one it uses:
+# one kernel with both paths would compile the rod-rod machinery for every world (~5 s cold).
+KERNELS = {("verlet", False): step_verlet, ("verlet", True): step_verlet_coupled,
+           ("stable", False): step_stable, ("stable", True): step_stable_coupled}
 
 
 @njit(cache=True, error_model="numpy")

@@ -34,7 +34,7 @@ from .drivers import (
     collider_impulses,
     collider_poses,
     end_step,
-    pose_at,
+    origin_at,
 )
 from .refcount import NO_REFCOUNT
 from .so3 import rotate_directors
@@ -196,7 +196,7 @@ def _clamp_reactions(r, tau, dt, c0, c1, f0, f1, rd, env, dl) -> None:
     for c in range(c0, c1):
         i = env.pcon_node[c]
         d = env.pcon_drv[c]
-        p, _ = pose_at(dl, d, tau)
+        p = origin_at(dl, d, tau)
         v = clamp_rate(dl, d, pos[i, 0] - p[0], pos[i, 1] - p[1], pos[i, 2] - p[2])
         m = rd.n1[N_MASS][i]
         add_node_reaction(r, d, tau, pos[i, 0], pos[i, 1], pos[i, 2],
