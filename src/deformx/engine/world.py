@@ -365,7 +365,7 @@ class World:
         else:
             results = [self._kernel(n_steps, self._sim, opts, *self._bufs, self._drivers.rows,
                                     self._pairs) for opts in self._opts]
-        self._drivers.rows[:] = self._env["dloc"][0]
+        step.collect_drivers(*self._bufs[2:], self._drivers.rows, len(self._rods))
         status = self._rods_p["status"]
         failed = [res[1] for res in results if res[1] >= 0]
         bad = min(failed, key=lambda r: status[r, 2]) if failed else -1

@@ -68,24 +68,81 @@ def copy_drivers(dst, src) -> None:
             dst[d, j] = src[d, j]
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _begin(dl, d, dt) -> None:
+    for j in range(3):
+        dl[d, D_V + j] += dt * dl[d, D_A + j]
+        dl[d, D_W + j] += dt * dl[d, D_AL + j]
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _end(dl, d, dt) -> None:
+    R = exp_times(dl[d, D_W], dl[d, D_W + 1], dl[d, D_W + 2], dt, _rot(dl, d))
+    for j in range(3):
+        dl[d, D_P + j] += dt * dl[d, D_V + j]
+    for j in range(9):
+        dl[d, D_R + j] = R[j]
+
+
 @njit(cache=True, error_model="numpy")
 def begin_step(dl, dt) -> None:
     """Rates of every driver for the coming step: v += a dt, w += alpha dt."""
     for d in range(dl.shape[0]):
-        for j in range(3):
-            dl[d, D_V + j] += dt * dl[d, D_A + j]
-            dl[d, D_W + j] += dt * dl[d, D_AL + j]
+        _begin(dl, d, dt)
 
 
 @njit(cache=True, error_model="numpy")
 def end_step(dl, dt) -> None:
     """Pose of every driver at the step's end: p += dt v, R <- Exp(dt w) R."""
     for d in range(dl.shape[0]):
-        R = exp_times(dl[d, D_W], dl[d, D_W + 1], dl[d, D_W + 2], dt, _rot(dl, d))
-        for j in range(3):
-            dl[d, D_P + j] += dt * dl[d, D_V + j]
-        for j in range(9):
-            dl[d, D_R + j] = R[j]
+        _end(dl, d, dt)
+
+
+@njit(cache=True, error_model="numpy")
+def step_rod_drivers(dl, dt, r, env, cols, end) -> None:
+    """``begin_step`` (or with ``end`` ``end_step``) of only the drivers rod ``r`` uses: its
+    clamps' (each once) and the colliders' (a batch of rods then does not integrate every
+    rod's clamp for every rod)."""
+    c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
+    f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
+    for c in range(c0, c1):
+        if not _seen(env, c0, c, f0, f0, env.pcon_drv[c]):
+            if end:
+                _end(dl, env.pcon_drv[c], dt)
+            else:
+                _begin(dl, env.pcon_drv[c], dt)
+    for c in range(f0, f1):
+        if not _seen(env, c0, c1, f0, c, env.fcon_drv[c]):
+            if end:
+                _end(dl, env.fcon_drv[c], dt)
+            else:
+                _begin(dl, env.fcon_drv[c], dt)
+    if cols is not None:
+        for c in range(cols.kind.shape[0]):
+            if end:
+                _end(dl, cols.drv[c], dt)
+            else:
+                _begin(dl, cols.drv[c], dt)
+
+
+@njit(cache=True, error_model="numpy")
+def store_drivers(drv, env, cols, r0, r1) -> None:
+    """The drivers advanced by rods r0 .. r1 - 1 back into the table: each clamp's from its
+    rod's copy, the colliders' from the first rod's."""
+    for r in range(r0, r1):
+        for c in range(env.rod_pcon[r], env.rod_pcon[r + 1]):
+            _copy_row(drv, env.dloc[r], env.pcon_drv[c])
+        for c in range(env.rod_fcon[r], env.rod_fcon[r + 1]):
+            _copy_row(drv, env.dloc[r], env.fcon_drv[c])
+    if cols is not None and r1 > r0:
+        for c in range(cols.kind.shape[0]):
+            _copy_row(drv, env.dloc[r0], cols.drv[c])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _copy_row(dst, src, d) -> None:
+    for j in range(src.shape[1]):
+        dst[d, j] = src[d, j]
 
 
 @njit(cache=True, inline="always", error_model="numpy")

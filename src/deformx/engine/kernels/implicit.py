@@ -44,14 +44,13 @@ from .drivers import (
     add_frame_reaction,
     add_impulse,
     add_node_reaction,
-    begin_step,
     copy_drivers,
+    step_rod_drivers,
     clamp_rates,
     clamp_values,
     clear_reactions,
     collider_impulses,
     collider_poses,
-    end_step,
 )
 from .verlet import OK, _check
 
@@ -500,7 +499,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
     fresh_step = True  # the drivers' rates of a new full step are still to be set
     while done < n_steps:
         if fresh_step:
-            begin_step(dl, dt)
+            step_rod_drivers(dl, dt, r, env, cols, False)
             fresh_step = False
         # Predictor: x + h v + h (v - v_prev), i.e. extrapolating the last step's acceleration
         # (vn still holds the previous step's start velocity): ~0.7 Newton iterations fewer on
@@ -724,7 +723,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
         elapsed += hs
         if elapsed >= h * (1.0 - 1e-9):
             done += 1
-            end_step(dl, dt)
+            step_rod_drivers(dl, dt, r, env, cols, True)
             fresh_step = True
             stats[r, 0] += 1
             elapsed = 0.0

@@ -15,19 +15,17 @@ from .bundles import (
     carve_env, carve_rods,
 )
 from .coupled import advance_world_implicit, advance_world_verlet
-from .drivers import begin_step, copy_drivers, end_step
+from .drivers import begin_step, copy_drivers, end_step, store_drivers
 from .implicit import advance_rods_implicit
 from .verlet import OK, advance_rods
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _finish(n_steps, opts, rd, env, drv):
-    """Drivers back from the rods' copies (or advanced alone without rods); the rod that
-    failed first, or -1."""
+def _finish(n_steps, opts, rd, env, cols, drv):
+    """Drivers back from the rods' copies; the rod that failed first, or -1."""
     r0, r1 = opts[OPT_R0], opts[OPT_R1]
     if opts[OPT_STORE]:
-        if r1 > r0:
-            copy_drivers(drv, env.dloc[r0])
+        store_drivers(drv, env, cols, r0, r1)
     bad = -1
     for r in range(r0, r1):
         if rd.status[r, 0] != OK and (bad < 0 or rd.status[r, 2] < rd.status[bad, 2]):
@@ -41,9 +39,10 @@ def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     its steps at once); returns (time, failed rod or -1, pairs)."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
-    advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, rd, env,
-                 carve_cols(CF, CI), drv, opts[OPT_LOAD] != 0)
-    return rd.r1[R_TIMES][opts[OPT_R0]], _finish(n_steps, opts, rd, env, drv), pairs
+    cols = carve_cols(CF, CI)
+    advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, rd, env, cols, drv,
+                 opts[OPT_LOAD] != 0)
+    return rd.r1[R_TIMES][opts[OPT_R0]], _finish(n_steps, opts, rd, env, cols, drv), pairs
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -54,8 +53,9 @@ def step_verlet_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     env = carve_env(EF, EI)
     for r in range(rd.ri[R_NE].shape[0]):
         copy_drivers(env.dloc[r], drv)
-    pairs = advance_world_verlet(n_steps, sim[SIM_T], sim, rd, env, carve_cols(CF, CI), pairs)
-    return rd.r1[R_TIMES][0], _finish(n_steps, opts, rd, env, drv), pairs
+    cols = carve_cols(CF, CI)
+    pairs = advance_world_verlet(n_steps, sim[SIM_T], sim, rd, env, cols, pairs)
+    return rd.r1[R_TIMES][0], _finish(n_steps, opts, rd, env, cols, drv), pairs
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -64,9 +64,10 @@ def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     returns (time, failed rod or -1, pairs)."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
+    cols = carve_cols(CF, CI)
     advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, opts, rd, env,
-                          carve_cols(CF, CI), drv, opts[OPT_LOAD] != 0, pairs, 0)
-    return rd.r1[R_TIMES][opts[OPT_R0]], _finish(n_steps, opts, rd, env, drv), pairs
+                          cols, drv, opts[OPT_LOAD] != 0, pairs, 0)
+    return rd.r1[R_TIMES][opts[OPT_R0]], _finish(n_steps, opts, rd, env, cols, drv), pairs
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -77,15 +78,21 @@ def step_stable_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     env = carve_env(EF, EI)
     for r in range(rd.ri[R_NE].shape[0]):
         copy_drivers(env.dloc[r], drv)
-    pairs = advance_world_implicit(n_steps, sim[SIM_T], sim, opts, rd, env, carve_cols(CF, CI),
-                                   pairs)
-    return rd.r1[R_TIMES][0], _finish(n_steps, opts, rd, env, drv), pairs
+    cols = carve_cols(CF, CI)
+    pairs = advance_world_implicit(n_steps, sim[SIM_T], sim, opts, rd, env, cols, pairs)
+    return rd.r1[R_TIMES][0], _finish(n_steps, opts, rd, env, cols, drv), pairs
 
 
 # (integrator, rods touch each other) -> entry kernel. A world compiles only the one it uses:
 # one kernel with both paths would compile the rod-rod machinery for every world (~5 s cold).
 KERNELS = {("verlet", False): step_verlet, ("verlet", True): step_verlet_coupled,
            ("stable", False): step_stable, ("stable", True): step_stable_coupled}
+
+
+@njit(cache=True, error_model="numpy")
+def collect_drivers(EF, EI, CF, CI, drv, n_rods) -> None:
+    """After rods advanced on threads: the drivers back from their copies."""
+    store_drivers(drv, carve_env(EF, EI), carve_cols(CF, CI), 0, n_rods)
 
 
 @njit(cache=True, error_model="numpy")

@@ -25,15 +25,14 @@ from .drivers import (
     add_frame_reaction,
     add_impulse,
     add_node_reaction,
-    begin_step,
     copy_drivers,
+    step_rod_drivers,
     clamp_rate,
     clamp_rates,
     clamp_values,
     clear_reactions,
     collider_impulses,
     collider_poses,
-    end_step,
     origin_at,
 )
 from .refcount import NO_REFCOUNT
@@ -114,7 +113,7 @@ def advance_rod(r, n_steps, t, sim, rd, env, cols, dl, use_extra, start_mid,
         _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h)
     for step in range(n_steps):
         if step > 0 or not start_mid:
-            begin_step(dl, dt)
+            step_rod_drivers(dl, dt, r, env, cols, False)
         t += h
         clamp_values(h, c0, c1, f0, f1, pos, Q, env, dl)
 
@@ -174,10 +173,10 @@ def advance_rod(r, n_steps, t, sim, rd, env, cols, dl, use_extra, start_mid,
             _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, dt)
         else:
             _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h)
-        end_step(dl, dt)
+        step_rod_drivers(dl, dt, r, env, cols, True)
         t += h
     if end_mid:
-        begin_step(dl, dt)
+        step_rod_drivers(dl, dt, r, env, cols, False)
         clamp_values(h, c0, c1, f0, f1, pos, Q, env, dl)
     else:
         clamp_values(0.0, c0, c1, f0, f1, pos, Q, env, dl)
