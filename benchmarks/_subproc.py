@@ -21,6 +21,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Iterator, Sequence
+import argparse
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
@@ -48,6 +49,19 @@ def _numba_cache_stats():
 def _report(**values):
     print(__MARK__ + json.dumps(values), flush=True)
 '''.replace("__MARK__", repr(_MARK))
+
+
+def tree_parser(doc: str) -> argparse.ArgumentParser:
+    """The options both benchmarks share: the tree to measure, the reference commit, rounds."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog=doc.split("\n\n", 1)[1])
+    parser.add_argument("--tree", type=Path, default=REPO,
+                        help="source tree to measure (default: this repository, %(default)s)")
+    parser.add_argument("--reference", default=DEFAULT_REFERENCE,
+                        help="commit to compare against (default: %(default)s)")
+    parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds (default: 3)")
+    return parser
 
 
 def git(repo: Path, *args: str) -> str:

@@ -22,7 +22,6 @@ Scenes (public API only, so that they run on both trees):
 
 from __future__ import annotations
 
-import argparse
 import sys
 import tempfile
 from pathlib import Path
@@ -31,9 +30,9 @@ from rich.console import Console
 from rich.table import Table
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _subproc import (DEFAULT_REFERENCE, REPO, check_tree, clear_in_tree_caches,  # noqa: E402
+from _subproc import (check_tree, clear_in_tree_caches,  # noqa: E402
                       header, now_and_load, numba_cache_files, prime,
-                      reference_tree, run_in_tree, span)
+                      reference_tree, run_in_tree, span, tree_parser)
 
 # Scene code: PREP runs before the clock starts (the user's own inputs), BUILD after the import.
 # Scene a is cli.demo_scene() as build_world() builds it; its dt, 2e-5 s, is what the demo
@@ -112,14 +111,7 @@ def cold_then_warm(tree: Path, scene: str) -> tuple[dict, dict]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                     formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=__doc__.split("\n\n", 1)[1])
-    parser.add_argument("--tree", type=Path, default=REPO,
-                        help="source tree to measure (default: this repository, %(default)s)")
-    parser.add_argument("--reference", default=DEFAULT_REFERENCE,
-                        help="commit to compare against (default: %(default)s)")
-    parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds (default: 3)")
+    parser = tree_parser(__doc__)
     parser.add_argument("--scenes", default="abc", help="scenes to run (default: abc)")
     parser.add_argument("--quick", action="store_true", help="1 round, scene a only")
     args = parser.parse_args()

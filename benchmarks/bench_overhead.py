@@ -25,7 +25,6 @@ Cases:
 
 from __future__ import annotations
 
-import argparse
 import sys
 import tempfile
 from pathlib import Path
@@ -34,8 +33,8 @@ from rich.console import Console
 from rich.table import Table
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _subproc import (DEFAULT_REFERENCE, REPO, check_tree, header, now_and_load,  # noqa: E402
-                      reference_tree, run_in_tree, span)
+from _subproc import (check_tree, header, now_and_load,  # noqa: E402
+                      reference_tree, run_in_tree, span, tree_parser)
 
 PROBE = """
 import itertools, math
@@ -115,14 +114,7 @@ ROWS = (
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                     formatter_class=argparse.RawDescriptionHelpFormatter,
-                                     epilog=__doc__.split("\n\n", 1)[1])
-    parser.add_argument("--tree", type=Path, default=REPO,
-                        help="source tree to measure (default: this repository, %(default)s)")
-    parser.add_argument("--reference", default=DEFAULT_REFERENCE,
-                        help="commit to compare against (default: %(default)s)")
-    parser.add_argument("--rounds", type=int, default=3, help="interleaved rounds (default: 3)")
+    parser = tree_parser(__doc__)
     parser.add_argument("--repeats", type=int, default=9,
                         help="timings per case within a run, median taken (default: 9)")
     parser.add_argument("--quick", action="store_true", help="1 round of 5 repeats")

@@ -7,7 +7,7 @@ from typing import Sequence
 import numpy as np
 
 from .contact import colliders as col
-from .kernels.bundles import OPT_COUPLED, OPT_ITER, OPT_LEN, OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE
+from .kernels.bundles import OPT_ITER, OPT_LEN, OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE
 from .packing import Packed
 
 
@@ -60,14 +60,12 @@ def cols_group(colliders: Sequence, ignored: set[tuple[int, int]], rods_p: Packe
     return packed
 
 
-def run_options(groups: Sequence[tuple[int, int]], iterations: int,
-                coupled: bool) -> list[np.ndarray]:
+def run_options(groups: Sequence[tuple[int, int]], iterations: int) -> list[np.ndarray]:
     """One ``opts`` array per range of rods a call advances (see ``kernels/bundles.py``)."""
     out = []
     for r0, r1 in groups:
         opts = np.zeros(OPT_LEN, dtype=np.int64)
         opts[OPT_ITER] = iterations
-        opts[OPT_COUPLED] = int(coupled)
         opts[OPT_LOAD] = 1
         opts[OPT_STORE] = int(len(groups) == 1)
         opts[OPT_R0], opts[OPT_R1] = r0, r1

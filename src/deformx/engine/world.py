@@ -323,7 +323,7 @@ class World:
         coupled = self.rod_contact and rp["segs"].shape[0] > 1
         self._groups = ([(0, len(self._rods))] if coupled
                         else balanced_groups(rp["ne"], self.threads))
-        self._opts = assemble.run_options(self._groups, self.iterations, coupled)
+        self._opts = assemble.run_options(self._groups, self.iterations)
         cp = self._cols_p
         self._bufs = (rp.F, rp.I, self._env.F, self._env.I, None if cp is None else cp.F,
                       None if cp is None else cp.I)

@@ -16,13 +16,10 @@ its origin, world frame) while the clamp holds it.
 
 from __future__ import annotations
 
-import math
-
 from numba import njit
 
 from .bundles import D_A, D_AL, D_P, D_R, D_V, D_W
-
-_SMALL = 0.05  # rad: series below, as in so3
+from .so3 import rodrigues_coefficients
 
 
 @njit(cache=True, error_model="numpy")
@@ -34,13 +31,7 @@ def exp_times(w0, w1, w2, tau, R):
     t2 = p0 * p0 + p1 * p1 + p2 * p2
     if t2 == 0.0:
         return R
-    if t2 < _SMALL * _SMALL:
-        s = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0)))
-        c = 0.5 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))))
-    else:
-        theta = math.sqrt(t2)
-        s = math.sin(theta) / theta
-        c = (1.0 - math.cos(theta)) / t2
+    s, c = rodrigues_coefficients(t2)
     # E = I + s K + c K^2, K = [p]x
     e00 = 1.0 - c * (p1 * p1 + p2 * p2)
     e11 = 1.0 - c * (p0 * p0 + p2 * p2)

@@ -16,6 +16,18 @@ _SMALL = 0.05  # rad; below it the truncated series are exact to double precisio
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def rodrigues_coefficients(t2: float) -> tuple[float, float]:
+    """(sin(t)/t, (1 - cos t)/t^2) for t^2 = ``t2``, by series below ``_SMALL`` (exact to
+    double precision there, and no sqrt, division or sin/cos)."""
+    if t2 < _SMALL * _SMALL:
+        s = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0)))
+        c = 0.5 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))))
+        return s, c
+    theta = math.sqrt(t2)
+    return math.sin(theta) / theta, (1.0 - math.cos(theta)) / t2
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def rotate_directors(Q: np.ndarray, e: int, scale: float, w0: float, w1: float, w2: float) -> None:
     """In place ``Q[e] <- exp(-scale [w]x) Q[e]`` for a material-frame angular velocity ``w``.
 
@@ -27,13 +39,7 @@ def rotate_directors(Q: np.ndarray, e: int, scale: float, w0: float, w1: float, 
     p2 = scale * w2
     t2 = p0 * p0 + p1 * p1 + p2 * p2
     # R = I - s [phi] + c [phi]^2 with s = sin(t)/t, c = (1 - cos t)/t^2, t = |phi|.
-    if t2 < _SMALL * _SMALL:
-        s = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0)))
-        c = 0.5 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))))
-    else:
-        theta = math.sqrt(t2)
-        s = math.sin(theta) / theta
-        c = (1.0 - math.cos(theta)) / t2
+    s, c = rodrigues_coefficients(t2)
     r00 = 1.0 - c * (p1 * p1 + p2 * p2)
     r11 = 1.0 - c * (p0 * p0 + p2 * p2)
     r22 = 1.0 - c * (p0 * p0 + p1 * p1)
