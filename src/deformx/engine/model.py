@@ -29,7 +29,7 @@ def pack_rods(rods: Sequence, dt: float) -> Packed:
     N = sum(nn) + GHOST_NODES * max(R - 1, 0)
     E = sum(ne) + GHOST_ELEMENTS * max(R - 1, 0)
     V = sum(nv) + GHOST_VORONOI * max(R - 1, 0)
-    b = Packed("rods", dict(R=R, N=N, E=E, V=V, S=sum(ne), M=sum(nn)))
+    b = Packed("rods", dict(R=R, N=N, E=E, V=V, S=sum(ne), M=sum(nn), Q=N + E))
     b["node0"][:] = [sum(nn[:i]) + GHOST_NODES * i for i in range(R)]
     b["elem0"][:] = [sum(ne[:i]) + GHOST_ELEMENTS * i for i in range(R)]
     b["vor0"][:] = [sum(nv[:i]) + GHOST_VORONOI * i for i in range(R)]
@@ -46,7 +46,7 @@ def pack_rods(rods: Sequence, dt: float) -> Packed:
     b["rest_vor"][:] = 1.0
     b["dil"][:] = 1.0
     b["rate"][:] = 1.0
-    b["c_plane"][:] = -1
+    b["sp_i"][..., 0] = -1  # no contact planes yet
     b["seg_rod"][:] = -1
     b["excluded"][:] = 1
     segs, nodes = [], []

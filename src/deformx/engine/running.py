@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import TYPE_CHECKING, Any, Sequence
 
 from . import validation as check
@@ -23,6 +24,9 @@ def run(world: "World", duration: float, progress: bool = False, recorder: Any =
     duration = check.non_negative("duration", duration, "s")
     dt = world.dt
     n_total = int(round(duration / dt))
+    if duration > 0.0 and n_total == 0:
+        warnings.warn(f"run: duration {duration:g} s is shorter than half a step (dt = {dt:g} s); "
+                      "nothing is simulated", stacklevel=3)
     cbs = list(callbacks) + ([recorder] if recorder is not None else [])
     periods = []
     for cb in cbs:

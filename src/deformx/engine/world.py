@@ -5,6 +5,8 @@ views with an index into them."""
 
 from __future__ import annotations
 
+import logging
+import warnings
 from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
@@ -161,6 +163,13 @@ class World:
             raise ValueError(f"rod must be a deformx.Rod, got {type(rod).__name__}")
         if rod._world is not None:
             raise ValueError("rod already belongs to a world")
+        short = rod.rest_lengths < 0.1 * np.maximum(rod.node_radius[:-1], rod.node_radius[1:]) \
+            if not rod.closed else rod.rest_lengths < 0.1 * rod.node_radius
+        if short.any():
+            k = int(np.argmax(short))
+            warnings.warn(f"rod: element {k} is {rod.rest_lengths[k]:.3g} m long, less than a "
+                          f"tenth of the rod's radius: contact and bending are not meaningful "
+                          f"there (use fewer elements)", stacklevel=2)
         rod._world = self
         rod._index = len(self._rods)
         self._rods.append(rod)

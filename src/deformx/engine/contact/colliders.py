@@ -36,32 +36,101 @@ from .segments import (
 KINDS = {"mesh": MESH, "sphere": SPHERE, "box": BOX, "capsule": CAPSULE, "cylinder": CYLINDER}
 
 
+MESH_FORMATS = (".obj", ".stl", ".ply", ".glb", ".gltf", ".off")
+
+
 def load_mesh(mesh: Any) -> tuple[np.ndarray, np.ndarray, bool]:
     """Vertices (V, 3) m, faces (F, 3) and watertightness of a mesh given as a file path
-    (OBJ/STL/PLY/GLB...), a ``trimesh.Trimesh`` or a ``(vertices, faces)`` pair."""
+    (OBJ/STL/PLY/GLB/glTF/OFF), a ``trimesh.Trimesh`` or a ``(vertices, faces)`` pair.
+
+    A file that cannot be read, holds no triangles, has faces pointing at missing vertices or
+    non-finite vertices gives a ``ValueError`` naming the file and the problem (trimesh alone
+    would drop such vertices and faces without a word, or raise from deep inside).
+    """
     import trimesh  # only needed here; the kernels take plain arrays
 
+    what = "mesh"
     if isinstance(mesh, (str, os.PathLike)):
-        if not os.path.exists(mesh):
-            raise ValueError(f"mesh: file not found: {os.fspath(mesh)!r}")
-        mesh = trimesh.load(mesh, force="mesh")
+        path = os.fspath(mesh)
+        what = f"mesh file {path!r}"
+        if not os.path.exists(path):
+            raise ValueError(f"mesh: file not found: {path!r}")
+        ext = os.path.splitext(path)[1].lower()
+        if ext not in MESH_FORMATS:
+            raise ValueError(f"{what}: unsupported format {ext or '(no extension)'!r}; "
+                             f"valid: {', '.join(MESH_FORMATS)}")
+        if ext == ".obj":
+            _check_obj(path, what)
+        try:
+            # process=False keeps what the file says (trimesh would merge and drop vertices).
+            mesh = trimesh.load(path, force="mesh", process=False)
+        except Exception as err:  # any reader failure: malformed, truncated, wrong format
+            raise ValueError(f"{what}: cannot be read as {ext[1:].upper()} "
+                             f"({type(err).__name__}: {err})") from None
+        if not isinstance(mesh, trimesh.Trimesh):
+            raise ValueError(f"{what}: holds no triangle mesh (got {type(mesh).__name__})")
     if isinstance(mesh, trimesh.Trimesh):
-        tm = mesh
+        V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     elif isinstance(mesh, (tuple, list)) and len(mesh) == 2:
         V = np.asarray(mesh[0], dtype=np.float64)
         F = np.asarray(mesh[1])
         if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3:
             raise ValueError("mesh: (vertices, faces) must have shapes (V, 3) and (F, 3), got "
                              f"{V.shape} and {F.shape}")
-        tm = trimesh.Trimesh(V, F, process=False)
+        if F.size and not np.issubdtype(F.dtype, np.integer):
+            raise ValueError(f"mesh: faces must be integer vertex indices, got {F.dtype}")
     else:
         raise ValueError("mesh must be a file path, a trimesh.Trimesh or a (vertices, faces) "
                          f"pair, got {type(mesh).__name__}")
-    V = np.ascontiguousarray(tm.vertices, dtype=np.float64)
-    F = np.ascontiguousarray(tm.faces, dtype=np.int64)
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    F = np.ascontiguousarray(F, dtype=np.int64)
     if F.shape[0] == 0:
-        raise ValueError("mesh has no triangles")
+        raise ValueError(f"{what}: has no triangles (empty, truncated or not a mesh file?)")
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        raise ValueError(f"{what}: {int(bad.sum())} vertices are NaN or infinite (first: "
+                         f"vertex {int(np.argmax(bad))})")
+    if F.min() < 0 or F.max() >= V.shape[0]:
+        raise ValueError(f"{what}: face indices must lie in [0, {V.shape[0] - 1}], got "
+                         f"[{int(F.min())}, {int(F.max())}]")
+    if what != "mesh":  # a file: merge duplicate vertices as trimesh.load does by default
+        tm = trimesh.Trimesh(V, F)
+        V = np.ascontiguousarray(tm.vertices, dtype=np.float64)
+        F = np.ascontiguousarray(tm.faces, dtype=np.int64)
+    else:
+        tm = mesh if isinstance(mesh, trimesh.Trimesh) else trimesh.Trimesh(V, F, process=False)
     return V, F, bool(tm.is_watertight)
+
+
+def _check_obj(path: str, what: str) -> None:
+    """Vertex and face records of an OBJ file: numbers that parse and are finite, face
+    indices (1-based or negative) that name existing vertices."""
+    n_vertices = 0
+    with open(path, "rb") as fh:
+        for line_no, raw in enumerate(fh, 1):
+            parts = raw.split()
+            if not parts:
+                continue
+            if parts[0] == b"v":
+                try:
+                    xyz = [float(x) for x in parts[1:4]]
+                except ValueError:
+                    raise ValueError(f"{what}: line {line_no}: vertex is not three numbers: "
+                                     f"{raw.strip()[:60]!r}") from None
+                if len(xyz) < 3 or not all(np.isfinite(xyz)):
+                    raise ValueError(f"{what}: line {line_no}: vertex must be three finite "
+                                     f"numbers, got {raw.strip()[:60]!r}")
+                n_vertices += 1
+            elif parts[0] == b"f":
+                for token in parts[1:]:
+                    try:
+                        k = int(token.split(b"/")[0])
+                    except ValueError:
+                        raise ValueError(f"{what}: line {line_no}: bad face index "
+                                         f"{token[:20]!r}") from None
+                    if k == 0 or k > n_vertices or k < -n_vertices:
+                        raise ValueError(f"{what}: line {line_no}: face index {k} names no "
+                                         f"vertex ({n_vertices} defined before it)")
 
 
 def pose_matrix(pose: Any, name: str = "pose") -> np.ndarray:

@@ -14,6 +14,8 @@ import math
 
 from numba import njit
 
+# Plane table columns: point (3), unit normal (3), stiffness, damping, mu_s, mu_k, automatic.
+PL_P, PL_N, PL_K, PL_C, PL_MUS, PL_MUK, PL_AUTO = 0, 3, 6, 7, 8, 9, 10
 # Sliding speed (m/s) below which the kinetic direction follows the applied load, not velocity.
 _SLIP_EPS = 1e-12
 
@@ -25,10 +27,10 @@ def plane_penalty(planes, p, mass, k_floor, dt_ref):
     The automatic stiffness gives a contact frequency of 0.2 / ``dt_ref`` but at least
     ``k_floor``; the automatic damping is critical for that stiffness.
     """
-    k = planes[p, 6]
-    if planes[p, 10] > 0.0:
+    k = planes[p, PL_K]
+    if planes[p, PL_AUTO] > 0.0:
         k = max(mass * (0.2 / dt_ref) ** 2, k_floor)
-    c = planes[p, 7]
+    c = planes[p, PL_C]
     if c < 0.0:
         c = 2.0 * math.sqrt(k * mass)
     return k, c

@@ -51,7 +51,7 @@ N_PAR = 12
 QUERY_CACHE = 32  # nearest triangles kept per query
 # Query cache columns (``qc_meta`` integers, ``qc_geo`` floats; see kernels/bundles.py).
 Q_COL, Q_N, Q_FLAT, Q_HINT = 0, 1, 2, 3
-Q_FAR = 6
+Q_FAR, Q_WITHIN = 6, 7  # qc_geo: the horizon, and the reach + skin it was filled for
 _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment crosses a face)
 # Coplanarity tolerance of a flat patch, relative to the contact reach (5 nm for a 5 mm rope):
 # the largest penetration a near-flat patch's shortcut can misjudge.
@@ -193,7 +193,8 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
         moved = _moved(qc_geo, slot, la, lb)
         delta2 = max(dist2(la, (qc_geo[slot, 0], qc_geo[slot, 1], qc_geo[slot, 2])),
                      dist2(lb, (qc_geo[slot, 3], qc_geo[slot, 4], qc_geo[slot, 5])))
-    refill = qc_meta[slot, Q_COL] != c or moved * math.sqrt(3.0) > skin
+    # Valid while the ends moved less than the reach the cache was filled for exceeds this one.
+    refill = qc_meta[slot, Q_COL] != c or moved * math.sqrt(3.0) > qc_geo[slot, Q_WITHIN] - reach
     while True:
         if refill:
             n, far = nearest_k_search(lo, hi, left, right, start, count, order, verts, faces,
@@ -204,6 +205,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
             qc_meta[slot, Q_COL] = c
             qc_meta[slot, Q_N] = n
             qc_geo[slot, Q_FAR] = far
+            qc_geo[slot, Q_WITHIN] = within
             qc_meta[slot, Q_FLAT] = _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far,
                                                 within, _FLAT_TOL * reach)
             qc_meta[slot, Q_HINT] = -1
@@ -507,7 +509,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
                 la = _to_local(pose, c, p[0], p[1], p[2])
                 ref = qc_meta[i, Q_FLAT]
                 if (qc_meta[i, Q_COL] == c and qc_meta[i, Q_HINT] >= 0
-                        and _moved(qc_geo, i, la, la) * math.sqrt(3.0) <= 0.5 * radius
+                        and _moved(qc_geo, i, la, la) * math.sqrt(3.0)
+                        <= qc_geo[i, Q_WITHIN] - radius
                         and _inside(Fg, qc_tris[i, qc_meta[i, Q_HINT]], la)):
                     height = _height(Fg, ref, la)
                     if abs(height) > radius:
@@ -587,7 +590,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
                 ref = qc_meta[slot, Q_FLAT]
                 if (qc_meta[slot, Q_COL] == c and qc_meta[slot, Q_HINT] >= 0
                         and qc_meta[slot, Q_HINT + 1] >= 0
-                        and _moved(qc_geo, slot, la, lb) * math.sqrt(3.0) <= 0.5 * radius):
+                        and _moved(qc_geo, slot, la, lb) * math.sqrt(3.0)
+                        <= qc_geo[slot, Q_WITHIN] - radius):
                     ha = _height(Fg, ref, la)
                     hb = _height(Fg, ref, lb)
                     if _outer_side(ha, hb, par[c, P_TWO_SIDED] != 0.0) and (

@@ -30,12 +30,12 @@ from numba.extending import overload
 # vectors, frames, scalars, integers): the kernels then pass ~17 arrays instead of ~70,
 # which keeps numba's compile time down (it grows with every array of every signature).
 # State rows come first in each stack: positions, velocities, frames, angular velocities;
-# the stable integrator's step start, predictor rates, viscous loads, plane friction anchors
-# and active set, last step and contraction rate; the rod-rod Verlet list's reference
+# the stable integrator's step start, predictor rates, viscous loads, contact planes and
+# friction anchors, last step and contraction rate; the rod-rod Verlet list's reference
 # positions and (pairs, valid, builds, touching).
 ROD_ARRAYS = (
-    ('n3', 'f', (14, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'anchor', 'c_dir', 'ref',
-                              'fext', 'force', 'contact_force', 'xp', 'vp', 'extra'), 8),
+    ('n3', 'f', (12, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'ref', 'fext', 'force',
+                              'contact_force', 'xp', 'vp', 'extra'), 6),
     ('e3', 'f', (10, 'E', 3), ('omega', 'wn', 'tn_el', 'J', 'inv_J', 'S', 'rest_sigma', 'text',
                               'torque', 'stress'), 3),
     ('e33', 'f', (2, 'E', 3, 3), ('Q', 'Qn'), 2),
@@ -44,20 +44,22 @@ ROD_ARRAYS = (
     ('e1', 'f', (4, 'E'), ('rest_len', 'seg_radius', 'dil', 'scr_edot'), 0),
     ('v1', 'f', (1, 'V'), ('rest_vor',), 0),
     ('r1', 'f', (6, 'R'), ('h_prev', 'rate', 'decay', 'nu', 'tau', 'times'), 2),
-    ('ni', 'i', (3, 'N'), ('anchor_on', 'c_plane', 'c_stick'), 3),
+    # The stable integrator's contact planes per query slot (see contact/speculative.py).
+    ('sp_i', 'i', ('Q', 2, 4), None, 1),
     ('ei', 'i', (7, 'E'), ('seg_a', 'seg_b', 'seg_rod', 'seg_k', 'seg_ne', 'seg_closed',
                           'excluded'), 0),
     ('ri', 'i', (6, 'R'), ('node0', 'elem0', 'vor0', 'ne', 'closed', 'group'), 0),
     ('pair_state', 'i', (4,), None, 1),
-    ('stats', 'f', ('R', 5), None, 0),
+    ('stats', 'f', ('R', 6), None, 0),
+    ('sp_f', 'f', ('Q', 2, 14), None, 1),
     ('el_K', 'f', ('E', 3, 3, 3), None, 0),
     ('status', 'i', ('R', 3), None, 0),
     ('segs', 'i', ('S',), None, 0),
     ('nodes', 'i', ('M',), None, 0),
 )
 # Row indices of the stacked rod fields.
-(N_POS, N_VEL, N_XN, N_VN, N_FN_EL, N_ANCHOR, N_C_DIR, N_REF, N_FEXT, N_FORCE, N_CONTACT_FORCE,
- N_XP, N_VP, N_EXTRA) = range(14)
+(N_POS, N_VEL, N_XN, N_VN, N_FN_EL, N_REF, N_FEXT, N_FORCE, N_CONTACT_FORCE, N_XP, N_VP,
+ N_EXTRA) = range(12)
 E_OMEGA, E_WN, E_TN_EL, E_J, E_INV_J, E_S, E_REST_SIGMA, E_TEXT, E_TORQUE, E_STRESS = range(10)
 E_Q, E_QN = 0, 1
 V_B, V_REST_KAPPA, V_KAPPA, V_COUPLE, V_SCR_C, V_SCR_X = 0, 1, 2, 3, 4, 5
@@ -65,7 +67,6 @@ N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2
 E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3
 V_REST_VOR = 0
 R_H_PREV, R_RATE, R_DECAY, R_NU, R_TAU, R_TIMES = 0, 1, 2, 3, 4, 5
-N_ANCHOR_ON, N_C_PLANE, N_C_STICK = 0, 1, 2
 E_SEG_A, E_SEG_B, E_SEG_ROD, E_SEG_K, E_SEG_NE, E_SEG_CLOSED, E_EXCLUDED = 0, 1, 2, 3, 4, 5, 6
 R_NODE0, R_ELEM0, R_VOR0, R_NE, R_CLOSED, R_GROUP = 0, 1, 2, 3, 4, 5
 ENV = (
@@ -89,7 +90,7 @@ ENV = (
 )
 COLS_STATE = (
     ("qc_meta", "i", ("Q", 5), None, 0),
-    ("qc_geo", "f", ("Q", 7), None, 0),
+    ("qc_geo", "f", ("Q", 8), None, 0),
     ("qc_tris", "i", ("Q", 32), None, 0),
     ("qc_dist", "f", ("Q", 32), None, 0),
     ("anchor", "f", ("Q", 4), None, 0),
@@ -169,9 +170,10 @@ def _layout(I):
 def carve_rods(F, I):
     """The rods group's arrays (see ``ROD_ARRAYS``)."""
     L = _layout(I)
-    return Rods(_f3(F, L, 0), _f3(F, L, 1), _f4(F, L, 2), _f3(F, L, 3), _f2(F, L, 4), _f2(F, L,
-                5), _f2(F, L, 6), _f2(F, L, 7), _f2(I, L, 8), _f2(I, L, 9), _f2(I, L, 10), _f(I,
-                L, 11), _f2(F, L, 12), _f4(F, L, 13), _f2(I, L, 14), _f(I, L, 15), _f(I, L, 16))
+    return Rods(_f3(F, L, 0), _f3(F, L, 1), _f4(F, L, 2), _f3(F, L, 3), _f2(F, L, 4),
+                _f2(F, L, 5), _f2(F, L, 6), _f2(F, L, 7), _f3(I, L, 8), _f2(I, L, 9),
+                _f2(I, L, 10), _f(I, L, 11), _f2(F, L, 12), _f3(F, L, 13), _f4(F, L, 14),
+                _f2(I, L, 15), _f(I, L, 16), _f(I, L, 17))
 
 
 @njit(cache=True, inline="always")

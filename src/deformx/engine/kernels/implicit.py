@@ -14,10 +14,12 @@ factors by banded Cholesky in O(n). Every stiff term is implicit, so the step is
 stiffness; the numerical damping is backward Euler's: a mode of angular frequency w keeps
 1/sqrt(1 + (w h)^2) of its amplitude per step.
 
-Contact is solved with an active set: within a Newton solve the touching nodes and their
-stick/slip states are fixed (smooth equations), then corrected and re-solved. Friction is an
-elastic stick spring anchored where the node touched down: a static load below mu_s N holds
-exactly (bounded elastic shift F/k, no creep), and sliding costs mu_k N.
+Contact (world planes, meshes, primitives) uses contact planes found once per step at its start
+with a speculative margin (see :mod:`deformx.engine.contact.speculative`): linear gaps, a force
+continuous at first touch, stick/slip that cannot alternate within a step, so Newton converges
+at large steps without halving them and nothing thinner than the margin is passed. Friction is
+an elastic stick spring anchored where the point touched down: a static load below mu_s N holds
+(bounded elastic shift F/k, no creep), and sliding costs mu_k N.
 """
 
 from __future__ import annotations
@@ -27,16 +29,16 @@ import math
 import numpy as np
 from numba import njit
 
-from ..contact.plane import plane_penalty
 from ..contact.rodrod import rod_pair_forces
-from ..contact.segments import rod_collider_contacts
+from ..contact.speculative import (SP_K, gather_planes, plane_forces, project_predictor,
+                                   release_pulling, start_penetrations)
 from .banded import BLOCK_BAND, add_lower, block_cholesky, block_solve, store_block
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
 from .bundles import (
     E_DIL, E_J, E_OMEGA, E_Q, E_QN, E_REST_LEN, E_S, E_SEG_ROD, E_STRESS, E_TEXT, E_TN_EL,
-    E_TORQUE, E_WN, N_ANCHOR, N_ANCHOR_ON, N_CONTACT_FORCE, N_C_DIR, N_C_PLANE, N_C_STICK,
-    N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS, N_POS, N_VEL, N_VN, N_XN,
+    E_TORQUE, E_WN, N_CONTACT_FORCE,
+    N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VEL, N_VN, N_XN,
     OPT_ITER, R_CLOSED, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU, R_TIMES, R_VOR0,
     SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_RR, SIM_TOL, V_B, V_KAPPA, V_REST_VOR,
 )
@@ -60,8 +62,13 @@ NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-step
 N_STATS = 5
 CHORD_RATE = 0.1  # reuse the factor while each update is below this fraction of the last
 EARLY_LIMIT = 10.0  # one-iteration steps only when the update is within this many tolerances
+MAX_SET_ROUNDS = 4  # contact releases per step before the set is frozen
 ACCEPT = 1e-2  # an unconverged update above this fraction of an element length is rejected
 MAX_REFINE = 64.0  # a step is halved at most down to dt / MAX_REFINE before giving up
+# Past the iteration cap Newton goes on, up to EXTEND times the cap, while each update is at
+# most EXTEND_RATE times the last (it converges, only slowly: large rotations, contact).
+EXTEND, EXTEND_RATE = 4, 0.8
+_DEBUG = False
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -227,176 +234,31 @@ def _assemble(h, ext, rd, nu, kv, geometric, A):
     return nb
 
 
-# Phases of the active-set contact treatment (see _contacts).
-PREDICT, ITERATE, CHECK, FINISH = 0, 1, 2, 3
-MAX_SET_ROUNDS = 4  # contact-set corrections per step before the set is frozen
-STICK_MARGIN = 0.99  # a sliding node's anchor trails at this fraction of the kinetic limit
-
-
-@njit(cache=True, inline="always", error_model="numpy")
-def _plane_gap(planes, p, pos, g, radius):
-    return ((pos[g, 0] - planes[p, 0]) * planes[p, 3] + (pos[g, 1] - planes[p, 1]) * planes[p, 4]
-            + (pos[g, 2] - planes[p, 2]) * planes[p, 5] - radius)
-
-
 @njit(cache=True, error_model="numpy")
-def _contacts(phase, n0, nn, h, planes, rd, A, add_forces) -> int:
-    """Implicit plane contact of one rod with a fixed active set per Newton solve.
-
-    Normal force ``-k gap - c v_n``. A sticking node is held by a spring of stiffness k to its
-    anchor (where it touched down); a sliding node feels kinetic friction ``mu_k N`` against
-    its sliding direction ``c_dir``, fixed during the solve. Within a solve the touching nodes
-    and their stick/slip states stay fixed, so the equations are smooth and Newton converges;
-    ``CHECK`` then corrects the states (release on separation; stick -> slip when the spring
-    force exceeds ``mu_s N``; slip -> stick when the sliding velocity reverses) and returns
-    the number of corrections.
-
-    phase PREDICT: choose the set at the predictor; ITERATE: add forces (``add_forces``) or
-    stiffness (into ``A``); CHECK: correct the set; FINISH: store contact forces and anchors.
-    """
-    pos, xn, anchor, anchor_on, c_plane = rd.n3[N_POS], rd.n3[N_XN], rd.n3[N_ANCHOR], rd.ni[N_ANCHOR_ON], rd.ni[N_C_PLANE]
-    c_stick, c_dir, mass, node_radius, node_kmin = rd.ni[N_C_STICK], rd.n3[N_C_DIR], rd.n1[N_MASS], rd.n1[N_NODE_RADIUS], rd.n1[N_NODE_KMIN]
-    force, contact_force = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE]
-    changes = 0
-    for i in range(nn):
-        g = n0 + i
-        if phase == PREDICT or phase == CHECK:
-            best = 0.0
-            best_p = -1
-            for p in range(planes.shape[0]):
-                gap = _plane_gap(planes, p, pos, g, node_radius[g])
-                if gap < best:
-                    best = gap
-                    best_p = p
-            if phase == PREDICT:
-                c_plane[g] = best_p
-                if best_p >= 0 and anchor_on[g] == 0:
-                    c_stick[g] = 1
-                    for d in range(3):
-                        anchor[g, d] = xn[g, d]
-                continue
-            if c_plane[g] < 0:
-                if best_p >= 0:  # a new contact
-                    c_plane[g] = best_p
-                    c_stick[g] = 1
-                    if anchor_on[g] == 0:
-                        for d in range(3):
-                            anchor[g, d] = xn[g, d]
-                    changes += 1
-                continue
-        if c_plane[g] < 0:
-            if phase == FINISH:
-                anchor_on[g] = 0
-            if phase == FINISH or (phase == ITERATE and add_forces):
-                contact_force[g, 0] = 0.0
-                contact_force[g, 1] = 0.0
-                contact_force[g, 2] = 0.0
-            continue
-        p = c_plane[g]
-        nx, ny, nz = planes[p, 3], planes[p, 4], planes[p, 5]
-        gap = _plane_gap(planes, p, pos, g, node_radius[g])
-        # As stiff as the explicit integrator's contact at dt <= 1e-4 s.
-        k, c = plane_penalty(planes, p, mass[g], node_kmin[g], min(h, 1e-4))
-        u0 = pos[g, 0] - xn[g, 0]
-        u1 = pos[g, 1] - xn[g, 1]
-        u2 = pos[g, 2] - xn[g, 2]
-        un = u0 * nx + u1 * ny + u2 * nz
-        fn = -k * gap - c * un / h
-        n_force = max(fn, 0.0)
-        mu_s, mu_k = planes[p, 8], planes[p, 9]
-        # Spring stretch from the anchor, in the tangent plane.
-        d0 = pos[g, 0] - anchor[g, 0]
-        d1 = pos[g, 1] - anchor[g, 1]
-        d2 = pos[g, 2] - anchor[g, 2]
-        dn = d0 * nx + d1 * ny + d2 * nz
-        d0 -= dn * nx
-        d1 -= dn * ny
-        d2 -= dn * nz
-        dmag = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
-        if phase == CHECK:
-            if fn <= 0.0:  # the plane would pull: the node is leaving it
-                c_plane[g] = -1
-                changes += 1
-            elif c_stick[g] == 1:
-                if k * dmag > mu_s * n_force and dmag > 0.0:
-                    c_stick[g] = 0
-                    c_dir[g, 0] = d0 / dmag
-                    c_dir[g, 1] = d1 / dmag
-                    c_dir[g, 2] = d2 / dmag
-                    changes += 1
-            elif u0 * c_dir[g, 0] + u1 * c_dir[g, 1] + u2 * c_dir[g, 2] <= 0.0:
-                # The sliding velocity reversed: it stops and sticks, spring pre-loaded so
-                # that the friction force is continuous.
-                c_stick[g] = 1
-                back = mu_k * n_force / k
-                for d in range(3):
-                    anchor[g, d] = pos[g, d] - back * c_dir[g, d]
-                changes += 1
-            continue
-        if c_stick[g] == 1:
-            f0 = n_force * nx - k * d0
-            f1 = n_force * ny - k * d1
-            f2 = n_force * nz - k * d2
-        else:
-            f0 = n_force * nx - mu_k * n_force * c_dir[g, 0]
-            f1 = n_force * ny - mu_k * n_force * c_dir[g, 1]
-            f2 = n_force * nz - mu_k * n_force * c_dir[g, 2]
-        if phase == FINISH:
-            anchor_on[g] = 1
-            if c_stick[g] == 0:
-                # Keep the anchor trailing just inside the kinetic limit for a later stick.
-                back = STICK_MARGIN * mu_k * n_force / k
-                for d in range(3):
-                    anchor[g, d] = pos[g, d] - back * c_dir[g, d]
-            contact_force[g, 0] = f0
-            contact_force[g, 1] = f1
-            contact_force[g, 2] = f2
-            continue
-        if add_forces:
-            force[g, 0] += f0
-            force[g, 1] += f1
-            force[g, 2] += f2
-            contact_force[g, 0] = f0
-            contact_force[g, 1] = f1
-            contact_force[g, 2] = f2
-        else:
-            knn = k + c / h
-            kt = k if c_stick[g] == 1 else 0.0
-            nv = (nx, ny, nz)
-            for a in range(3):
-                for b in range(3):
-                    kab = (knn - kt) * nv[a] * nv[b]
-                    if a == b:
-                        kab += kt
-                    A[2 * i, 0, a, b] += kab
-    return changes
-
-
-@njit(cache=True, error_model="numpy")
-def _more_contacts(r, ext, h, rd, cols, pairs, n_pairs, rr, clear, commit):
-    """Mesh, primitive and rod-rod contact forces of the iterate, and their stiffness.
-
-    ``clear`` zeroes ``contact_force`` first (when no plane pass has written it); ``commit``
-    (accepted step) stores the friction anchors and the reactions.
-    """
+def _rod_contacts(r, ext, h, rd, planes, cols, pairs, n_pairs, rr, commit):
+    """All contact forces of rod ``r`` at the iterate (its slot planes against world planes,
+    meshes and primitives; rod-rod pairs) into ``force`` and ``contact_force``, their stiffness
+    into ``el_K``; ``commit`` (accepted step) stores the friction anchors and reactions.
+    Returns a count of the active contacts (planes + 1000003 pairs) that changes when they do."""
     n0, e0, _, ne, nn, _, _ = ext
     contact_force, el_K = rd.n3[N_CONTACT_FORCE], rd.el_K
-    if clear:
-        for i in range(n0, n0 + nn):
-            for d in range(3):
-                contact_force[i, d] = 0.0
+    for i in range(n0, n0 + nn):
+        for d in range(3):
+            contact_force[i, d] = 0.0
     for e in range(e0, e0 + ne):
         for q in range(3):
             for i in range(3):
                 for j in range(3):
                     el_K[e, q, i, j] = 0.0
-    # As stiff as the explicit integrator's contact at dt <= 1e-4 s (as for planes).
+    # As stiff as the explicit integrator's contact at dt <= 1e-4 s.
     dt_ref = min(h, 1e-4)
-    if cols is not None:
-        rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, rd.n3[N_POS], rd.n3[N_VEL], rd.n3[N_XN], rd,
-                              cols, commit, True)
+    count = 0
+    if planes.shape[0] > 0 or cols is not None:
+        count += plane_forces(r, n0, nn, e0, ne, h, dt_ref, rd.n3[N_POS], rd.n3[N_XN], rd.n3[N_VEL],
+                     planes, rd, cols, rd.sp_i, rd.sp_f, commit, rd.stats[r])
     if n_pairs > 0:
-        rod_pair_forces(r, pairs, n_pairs, rd, dt_ref, h, rr, True)
+        count += 1000003 * rod_pair_forces(r, pairs, n_pairs, rd, dt_ref, h, rr, True)
+    return count
 
 
 @njit(cache=True, error_model="numpy")
@@ -452,7 +314,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
     rod_nu, rod_tau = rd.r1[R_NU], rd.r1[R_TAU]
     pos, vel, Q, omega = rd.n3[N_POS], rd.n3[N_VEL], rd.e33[E_Q], rd.e3[E_OMEGA]
     xn, vn, Qn, wn, fn_el, tn_el = rd.n3[N_XN], rd.n3[N_VN], rd.e33[E_QN], rd.e3[E_WN], rd.n3[N_FN_EL], rd.e3[E_TN_EL]
-    anchor_on, h_prev, rate = rd.ni[N_ANCHOR_ON], rd.r1[R_H_PREV], rd.r1[R_RATE]
+    h_prev, rate = rd.r1[R_H_PREV], rd.r1[R_RATE]
     mass, J, rest_len, rest_vor = rd.n1[N_MASS], rd.e3[E_J], rd.e1[E_REST_LEN], rd.v1[V_REST_VOR]
     seg_rod, fext, text = rd.ei[E_SEG_ROD], rd.n3[N_FEXT], rd.e3[E_TEXT]
     force, torque, dil, kappa = rd.n3[N_FORCE], rd.e3[E_TORQUE], rd.e1[E_DIL], rd.v3[V_KAPPA]
@@ -470,7 +332,6 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
     A = np.zeros((nb, BLOCK_BAND + 1, 3, 3))
     rhs = np.zeros((nb, 3))
     fixed = np.zeros(nb, dtype=np.bool_)
-    no_band = np.zeros((0, BLOCK_BAND + 1, 3, 3))
     has_planes = planes.shape[0] > 0
     n_cols = 0
     if cols is not None:  # None without colliders (the branch is pruned at compile time)
@@ -479,7 +340,13 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
     for p in range(n_pairs):
         if seg_rod[pairs[p, 0]] == r or seg_rod[pairs[p, 1]] == r:
             own_pairs += 1
-    more_contacts = n_cols > 0 or own_pairs > 0
+    # Contact planes per slot (see contact/speculative.py) and their scratch.
+    sources = has_planes or n_cols > 0
+    any_contact = sources or own_pairs > 0
+    keep_src = np.empty(SP_K, dtype=np.int64)
+    keep_f = np.empty(SP_K)
+    keep_n = np.empty((SP_K, 8))
+    x_start = np.empty((SP_K, 3))
     acc = np.zeros((nn, 3))  # predictor: h * (last step's acceleration), per node
     alpha = np.zeros((ne, 3))  # and per element
     # Clamped unknowns: their values are prescribed, so their rows/columns drop out.
@@ -501,24 +368,20 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
         if fresh_step:
             step_rod_drivers(dl, dt, r, env, cols, False)
             fresh_step = False
+        # Contact planes of this step, found at its start (colliders at their start poses).
+        touching = own_pairs > 0
+        if sources:
+            if cols is not None:
+                collider_poses(r, elapsed, cols, dl)
+            if gather_planes(r, n0, nn, e0, ne, hs, pos, vel, gravity, planes, rd, cols,
+                             rd.sp_i, rd.sp_f, keep_src, keep_f, keep_n, x_start) > 0:
+                touching = True
+            start_penetrations(r, n0, nn, e0, ne, pos, planes, rd, cols, rd.sp_i, rd.sp_f,
+                               pos.shape[0])
         # Predictor: x + h v + h (v - v_prev), i.e. extrapolating the last step's acceleration
         # (vn still holds the previous step's start velocity): ~0.7 Newton iterations fewer on
         # smooth motion. Contact makes velocities jump and then this misleads Newton, so a rod
-        # touching a plane only gets a small third-order term h^2 (v - v_prev).
-        touching = False
-        for i in range(n0, n0 + nn):
-            if anchor_on[i] != 0:
-                touching = True
-                break
-        if cols is not None:  # colliders: node anchors, then element anchors
-            for i in range(n0, n0 + nn):
-                if cols.anchor_id[i] >= 0:
-                    touching = True
-                    break
-            for e in range(e0, e0 + ne):
-                if cols.anchor_id[pos.shape[0] + e] >= 0:
-                    touching = True
-                    break
+        # near a contact only gets a small third-order term h^2 (v - v_prev).
         extrapolate = 0.0 if last_hs != hs else (hs if touching else 1.0)
         for i in range(n0, n0 + nn):
             for d in range(3):
@@ -552,10 +415,11 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
         clamp_values(elapsed + hs, c0, c1, f0, f1, pos, Q, env, dl)
         if cols is not None:
             collider_poses(r, elapsed + hs, cols, dl)
-        if has_planes:
-            _contacts(PREDICT, n0, nn, hs, planes, rd, no_band, False)
+        if sources:
+            project_predictor(r, n0, nn, pos, planes, rd, cols, rd.sp_i, rd.sp_f, fixed)
         set_rounds = 0
-        budget = max_iter
+        # Near contacts Newton may take twice the iterations before the step is halved.
+        budget = max_iter if not touching else 2 * max_iter
         step_scale = 1.0
         last_update = math.inf
 
@@ -566,6 +430,8 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
         update = math.inf  # so the second iteration reuses the first one's factor (chord)
         previous = math.inf
         _implied_rates(n0, nn, e0, ne, inv_hs, pos, xn, Q, Qn, vel, omega)
+        active = 0
+        factored_active = -1
         while it < budget:
             it += 1
             rod_internal_loads(r, rd)
@@ -582,10 +448,8 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     force[i, d] += mass[i] * gravity[d] + fext[i, d]
-            if has_planes:
-                _contacts(ITERATE, n0, nn, hs, planes, rd, no_band, True)
-            if more_contacts:
-                _more_contacts(r, ext, hs, rd, cols, pairs, n_pairs, rr, not has_planes, False)
+            if any_contact:
+                active = _rod_contacts(r, ext, hs, rd, planes, cols, pairs, n_pairs, rr, False)
             # Residual (negated): forces minus inertia and damping.
             for i in range(nn):
                 g = n0 + i
@@ -608,15 +472,15 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
             # (chord iterations are ~3x cheaper); if the stress terms make it indefinite,
             # retry with Gauss-Newton.
             bad = 0
-            refactor = it == 1 or update > CHORD_RATE * previous
+            # A contact switching on or off changes the matrix: a chord step would overshoot.
+            refactor = it == 1 or update > CHORD_RATE * previous or active != factored_active
+            factored_active = active if refactor else factored_active
             previous = update
             for geometric in (True, False):
                 if not refactor:
                     break
                 _assemble(hs, ext, rd, nu, kv, geometric, A)
-                if has_planes:
-                    _contacts(ITERATE, n0, nn, hs, planes, rd, A, False)
-                if more_contacts:
+                if any_contact:
                     _add_element_stiffness(A, e0, ne, nn, el_K)
                 for q in range(nb):
                     if fixed[q]:  # prescribed unknowns: identity row and column
@@ -646,6 +510,8 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
             # (a locally non-convex problem, e.g. a compressed soft rod), so take a shorter step.
             step_scale = step_scale * 0.5 if update >= last_update else 1.0
             last_update = update
+            if _DEBUG:
+                print(t, hs, it, update / length_scale, step_scale, active % 65537, active // 65537)
             update *= step_scale
             # Apply the update: positions add, frames rotate by the material rotation vector;
             # and the implied rates of the new iterate (as _implied_rates), while it is at hand.
@@ -664,21 +530,24 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
                 omega[e, 2] = w2 * inv_hs
             # Convergence: what is left after this update is about rate * update, with the
             # contraction rate measured on this and earlier steps (CVODE's test), so smooth
-            # steps can stop after one iteration. Not for a rod touching a plane, whose
-            # contact set must be confirmed by a converged solve.
+            # steps can stop after one iteration. Not for a rod near a contact, whose force
+            # switches on within the step.
             if it >= 2 and previous > 0.0 and previous < math.inf:
                 rate[r] = max(0.3 * rate[r], update / previous)
             early = (it == 1 and not touching and update <= EARLY_LIMIT * tol * length_scale
                      and rate[r] * update <= tol * length_scale)
+            if (it == budget and update <= EXTEND_RATE * previous and previous < math.inf
+                    and it < EXTEND * max_iter):
+                budget += 1  # still contracting: a few more iterations cost less than halving
             done_iterating = early or update <= tol * length_scale or it == budget
             if done_iterating:
-                if has_planes and set_rounds < MAX_SET_ROUNDS:
-                    if _contacts(CHECK, n0, nn, hs, planes, rd, no_band, False) > 0:
-                        # The contact set changed: solve again with it (fresh matrix).
-                        set_rounds += 1
-                        budget = it + max_iter
-                        previous = 0.0  # forces a fresh factorisation
-                        continue
+                if sources and set_rounds < MAX_SET_ROUNDS and release_pulling(
+                        n0, nn, e0, ne, pos.shape[0], rd.sp_i, rd.sp_f) > 0:
+                    # Contacts that pull were released: solve again without them.
+                    set_rounds += 1
+                    budget = it + max_iter
+                    previous = 0.0  # forces a fresh factorisation
+                    continue
                 converged = early or update <= tol * length_scale
                 break
         if failed == OK and not converged and update > ACCEPT * length_scale:
@@ -705,10 +574,8 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
             status[r, 2] = done
             return t
         # Accepted (velocities are the last iterate's): friction anchors and clamp rates.
-        if has_planes:
-            _contacts(FINISH, n0, nn, hs, planes, rd, no_band, False)
-        if more_contacts:
-            _more_contacts(r, ext, hs, rd, cols, pairs, n_pairs, rr, not has_planes, True)
+        if any_contact:
+            _rod_contacts(r, ext, hs, rd, planes, cols, pairs, n_pairs, rr, True)
         if cols is not None:
             collider_impulses(r, hs, cols, env)
         clamp_rates(elapsed + hs, c0, c1, f0, f1, pos, vel, Q, omega, env, dl)

@@ -1,0 +1,550 @@
+"""Contact of the stable integrator: contact planes found once per step, smooth force law.
+
+A step of 10 ms moves a falling rope by centimetres, more than its radius, so contacts found at
+the Newton iterates can be missed (a thin sheet passed between two iterates) and appear and
+vanish from one iterate to the next (Newton then halves the step). Instead, at the start of each
+step every node and every segment looks for the nearest surface features within its radius plus
+the distance it and the collider can travel in the step (a speculative margin), and keeps, for
+the whole step, the tangent plane of each (point and normal in the collider's frame, so it moves
+with the collider). During the step the gap of a point is its signed distance to that plane: a
+linear function of the unknowns, so the Newton matrix is exact, nothing moving less than the
+margin can pass the surface, and the side a point is on is the side it started the step on.
+
+Force law per plane (penetration ``d``, its value ``d0`` at the step start):
+
+    N = k (d - d_off) + c (d - max(d0, 0)) / h,   N >= 0,   d_off = max(d0 - v_out h, 0)
+
+The damping acts on the penetration gained in contact (not on the approach speed averaged over a
+step that began in free flight), so N is continuous and zero at first touch; ``d_off`` lets a
+point that starts the step deeper than ``v_out h`` (a rod placed inside a collider) come out at
+no more than ``v_out`` instead of being launched. Friction is the spring-slider of
+:mod:`.segments` (anchor in the collider frame, stick below ``mu_s N``, slide at ``mu_k N``),
+saturated smoothly (``|f_t| = mu N tanh(|s| / (mu N))`` for the spring's trial force ``s``) so that
+Newton sees no switch between stick and slip; the anchor is dragged along only between steps,
+when a point ended its step sliding (which also selects ``mu_k`` over ``mu_s`` for the next one).
+
+Within a step a plane that has pushed stays active, its force law applied even where it would
+pull, until Newton has converged; planes that pull then are released and the solve goes on
+(an active set, so that contacts at the edge of touching cannot switch at every iterate).
+
+Per query slot (node ``i``, element ``N + e``) up to ``SP_K`` planes from different sources
+(planes of the world, then colliders): ``sp_i[q, k]`` = (source, anchored, sliding at the last
+step, active-set state), source
+-1 for none, ``p`` for world plane ``p``, ``L + c`` for collider ``c``; ``sp_f[q, k]`` = point
+(3), normal (3) in the source's frame, segment parameter, d0, anchor point (3) in the source's
+frame, anchored segment parameter, current penetration and normal force (scratch).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from ..kernels.bundles import (
+    N_CONTACT_FORCE, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS,
+)
+from .plane import PL_AUTO, PL_C, PL_K, PL_MUK, PL_MUS
+from .segments import (
+    MESH, P_MUK, P_MUS, _add_reaction, _mesh_closest, _rotate, _shape_closest,
+    _to_local, _to_world, collider_penalty,
+)
+
+SP_K = 2  # contact planes per query slot
+SP_COLS_I, SP_COLS_F = 4, 14
+SP_SRC, SP_ANCHORED, SP_SLIDING, SP_SET = 0, 1, 2, 3
+SP_Q, SP_N, SP_S, SP_D0, SP_A, SP_AS, SP_PEN, SP_FN = 0, 3, 6, 7, 8, 11, 12, 13
+# SP_SET: within a step a plane is inactive (0), active (1: its force law holds even if it
+# pulls, so that Newton sees a smooth problem) or released (2: it pulled at a converged solve)
+INACTIVE, ACTIVE, RELEASED = 0, 1, 2
+V_OUT = 0.1  # m/s: the fastest a point starting inside a collider is pushed out
+# Friction saturates as mu N tanh(y), y = |trial force| / (mu N); a step that ends beyond
+# Y_SLIDE counts as sliding (kinetic coefficient next step) and drags its anchor up to Y_ANCHOR
+# behind the point (a spring loaded to 0.76 mu N: when the point stops it springs back by less
+# than mu N / k instead of being held at the friction limit).
+Y_SLIDE, Y_ANCHOR = 3.0, 1.0
+# m: the smallest stick displacement the friction saturates over (with a contact stiffness k
+# the spring's own mu N / k is used when larger): a stiff wire's mu N / k can be 0.01 um,
+# finer than Newton resolves, and friction would then switch direction between iterates.
+STICK_ZONE = 1e-6
+MARGIN = 2.0  # the speculative margin is this many times the step's relative travel
+
+
+@njit(cache=True, error_model="numpy")
+def _frame_point(src, n_planes, pose, q0, q1, q2):
+    """World point of a point given in the frame of ``src`` (world planes: the world)."""
+    if src < n_planes:
+        return q0, q1, q2
+    return _to_world(pose, src - n_planes, q0, q1, q2)
+
+
+@njit(cache=True, error_model="numpy")
+def _frame_vector(src, n_planes, pose, v0, v1, v2):
+    if src < n_planes:
+        return v0, v1, v2
+    return _rotate(pose, src - n_planes, v0, v1, v2)
+
+
+@njit(cache=True, error_model="numpy")
+def _local_point(src, n_planes, pose, x0, x1, x2):
+    if src < n_planes:
+        return x0, x1, x2
+    return _to_local(pose, src - n_planes, x0, x1, x2)
+
+
+@njit(cache=True, error_model="numpy")
+def _local_vector(src, n_planes, pose, v0, v1, v2):
+    if src < n_planes:
+        return v0, v1, v2
+    c = src - n_planes
+    return (pose[c, 0, 0] * v0 + pose[c, 1, 0] * v1 + pose[c, 2, 0] * v2,
+            pose[c, 0, 1] * v0 + pose[c, 1, 1] * v1 + pose[c, 2, 1] * v2,
+            pose[c, 0, 2] * v0 + pose[c, 1, 2] * v1 + pose[c, 2, 2] * v2)
+
+
+@njit(cache=True, error_model="numpy")
+def _surface_velocity(src, n_planes, pose, twist, q):
+    """Velocity (m/s, world) of the surface point q (world) of ``src`` (planes do not move)."""
+    if src < n_planes:
+        return 0.0, 0.0, 0.0
+    c = src - n_planes
+    rx, ry, rz = q[0] - pose[c, 0, 3], q[1] - pose[c, 1, 3], q[2] - pose[c, 2, 3]
+    return (twist[c, 0] + twist[c, 4] * rz - twist[c, 5] * ry,
+            twist[c, 1] + twist[c, 5] * rx - twist[c, 3] * rz,
+            twist[c, 2] + twist[c, 3] * ry - twist[c, 4] * rx)
+
+
+@njit(cache=True, error_model="numpy")
+def _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, src, gap, q, n, s, pose, n_planes):
+    """Offer a plane of ``src`` (gap in m, point q and normal n in the world) to ``slot``:
+    the ``SP_K`` nearest of different sources are kept (``keep_*`` holds the candidates)."""
+    k = -1
+    for j in range(SP_K):
+        if keep_src[j] < 0 or gap < keep_f[j]:
+            k = j
+            break
+    if k < 0:
+        return
+    for j in range(SP_K - 1, k, -1):
+        keep_src[j] = keep_src[j - 1]
+        keep_f[j] = keep_f[j - 1]
+        for d in range(8):
+            keep_n[j, d] = keep_n[j - 1, d]
+    keep_src[k] = src
+    keep_f[k] = gap
+    lq = _local_point(src, n_planes, pose, q[0], q[1], q[2])
+    ln = _local_vector(src, n_planes, pose, n[0], n[1], n[2])
+    for d in range(3):
+        keep_n[k, d] = lq[d]
+        keep_n[k, 3 + d] = ln[d]
+    keep_n[k, 6] = s
+
+
+@njit(cache=True, error_model="numpy")
+def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
+    """Replace the slot's planes by the candidates, carrying over the friction anchor of a
+    source that was there before; a new anchor is the slot's point at the step start
+    (``x_start``, in the source's frame; ``s_start`` its segment parameter)."""
+    old_src = (sp_i[slot, 0, SP_SRC], sp_i[slot, 1, SP_SRC])
+    old_on = (sp_i[slot, 0, SP_ANCHORED], sp_i[slot, 1, SP_ANCHORED])
+    old_sliding = (sp_i[slot, 0, SP_SLIDING], sp_i[slot, 1, SP_SLIDING])
+    old_a = ((sp_f[slot, 0, SP_A], sp_f[slot, 0, SP_A + 1], sp_f[slot, 0, SP_A + 2],
+              sp_f[slot, 0, SP_AS]),
+             (sp_f[slot, 1, SP_A], sp_f[slot, 1, SP_A + 1], sp_f[slot, 1, SP_A + 2],
+              sp_f[slot, 1, SP_AS]))
+    for k in range(SP_K):
+        src = keep_src[k]
+        sp_i[slot, k, SP_SRC] = src
+        sp_i[slot, k, SP_SLIDING] = 0
+        sp_i[slot, k, SP_ANCHORED] = 0
+        sp_i[slot, k, SP_SET] = INACTIVE
+        if src < 0:
+            continue
+        for d in range(7):
+            sp_f[slot, k, d] = keep_n[k, d]
+        for j in range(SP_K):
+            if old_src[j] == src and old_on[j] != 0:
+                sp_i[slot, k, SP_ANCHORED] = 1
+                sp_i[slot, k, SP_SLIDING] = old_sliding[j]
+                for d in range(3):
+                    sp_f[slot, k, SP_A + d] = old_a[j][d]
+                sp_f[slot, k, SP_AS] = old_a[j][3]
+        if sp_i[slot, k, SP_ANCHORED] == 0:
+            sp_f[slot, k, SP_A] = x_start[k, 0]
+            sp_f[slot, k, SP_A + 1] = x_start[k, 1]
+            sp_f[slot, k, SP_A + 2] = x_start[k, 2]
+            sp_f[slot, k, SP_AS] = s_start
+
+
+@njit(cache=True, error_model="numpy")
+def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, sp_f, keep_src,
+                  keep_f, keep_n, x_start) -> int:
+    """Find each slot's contact planes at the step start (positions ``X``, velocities ``V``;
+    colliders at their start poses in ``cols.pose[r]``); returns how many slots have one.
+
+    ``keep_*``, ``x_start``: scratch of ``SP_K`` rows. The margin is ``MARGIN`` times the
+    distance the point and the collider can close in the step (speed times ``h`` plus half the
+    gravity drop) plus half the radius.
+    """
+    node_radius = rd.n1[N_NODE_RADIUS]
+    n_planes = planes.shape[0]
+    n_nodes = X.shape[0]
+    n_cols = 0
+    if cols is not None:
+        n_cols = cols.kind.shape[0]
+    g = math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+    # Collider poses; without colliders an array of the same type that is never read (world
+    # planes are given in the world frame).
+    pose3 = rd.e33[0]
+    if cols is not None:
+        pose3 = cols.pose[r]
+    found = 0
+    for k in range(nn + ne):
+        node = k < nn
+        e = -1
+        if node:
+            a = n0 + k
+            b = a
+            slot = a
+            radius = node_radius[a]
+        else:
+            e = e0 + k - nn
+            a = n0 + k - nn
+            b = a + 1 if k - nn + 1 < nn else n0
+            slot = n_nodes + e
+            radius = 0.5 * (node_radius[a] + node_radius[b])
+        pa = (X[a, 0], X[a, 1], X[a, 2])
+        pb = (X[b, 0], X[b, 1], X[b, 2])
+        speed = max(math.sqrt(V[a, 0] ** 2 + V[a, 1] ** 2 + V[a, 2] ** 2),
+                    math.sqrt(V[b, 0] ** 2 + V[b, 1] ** 2 + V[b, 2] ** 2))
+        travel = speed * h + 0.5 * g * h * h
+        for j in range(SP_K):
+            keep_src[j] = -1
+            keep_f[j] = 0.0
+        if node:
+            for p in range(n_planes):
+                gap = ((pa[0] - planes[p, 0]) * planes[p, 3] + (pa[1] - planes[p, 1]) * planes[p, 4]
+                       + (pa[2] - planes[p, 2]) * planes[p, 5]) - radius
+                if gap < MARGIN * travel + 0.5 * radius:
+                    q = (pa[0] - (gap + radius) * planes[p, 3], pa[1] - (gap + radius) * planes[p, 4],
+                         pa[2] - (gap + radius) * planes[p, 5])
+                    _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, p, gap, q,
+                           (planes[p, 3], planes[p, 4], planes[p, 5]), 0.0, pose3, n_planes)
+        if cols is not None:
+            pose, twist = cols.pose[r], cols.twist[r]
+            for c in range(n_cols):
+                if cols.allowed[r, c] == 0:
+                    continue
+                # The collider's own travel: its origin's speed and its rotation's sweep.
+                rx = 0.5 * (pa[0] + pb[0]) - pose[c, 0, 3]
+                ry = 0.5 * (pa[1] + pb[1]) - pose[c, 1, 3]
+                rz = 0.5 * (pa[2] + pb[2]) - pose[c, 2, 3]
+                vc = (math.sqrt(twist[c, 0] ** 2 + twist[c, 1] ** 2 + twist[c, 2] ** 2)
+                      + math.sqrt(twist[c, 3] ** 2 + twist[c, 4] ** 2 + twist[c, 5] ** 2)
+                      * math.sqrt(rx * rx + ry * ry + rz * rz))
+                reach = radius + MARGIN * (travel + vc * h) + 0.5 * radius
+                if cols.kind[c] == MESH:
+                    hit, s, sd, n, q = _mesh_closest(
+                        c, cols.rng[c, 4], pose, cols.par, cols.MV, cols.MF, cols.Blo, cols.Bhi,
+                        cols.Bleft, cols.Bright, cols.Bstart, cols.Bcount, cols.Border, cols.Fn,
+                        cols.En, cols.Vn, cols.Fg, cols.qc_meta, cols.qc_geo, cols.qc_tris,
+                        cols.qc_dist, cols.tr_stack[r], cols.tr_bound[r], slot, pa, pb, reach)
+                else:
+                    hit, s, sd, n, q = _shape_closest(c, cols.kind[c], pose, cols.par, pa, pb,
+                                                      reach)
+                if not hit:
+                    continue
+                if not node and (s <= 0.0 or s >= 1.0):
+                    continue  # a segment's end: the node carries it
+                _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c, sd - radius,
+                       q, n, s, pose, n_planes)
+        s0 = 0.0
+        for j in range(SP_K):
+            if keep_src[j] < 0:
+                continue
+            src = keep_src[j]
+            s0 = keep_n[j, 6]
+            xs = ((1.0 - s0) * pa[0] + s0 * pb[0], (1.0 - s0) * pa[1] + s0 * pb[1],
+                  (1.0 - s0) * pa[2] + s0 * pb[2])
+            ls = _local_point(src, n_planes, pose3, xs[0], xs[1], xs[2])
+            x_start[j, 0], x_start[j, 1], x_start[j, 2] = ls
+        _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s0)
+        if keep_src[0] >= 0:
+            found += 1
+    return found
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _plane_of(sp_f, slot, k, src, n_planes, pose):
+    q = _frame_point(src, n_planes, pose, sp_f[slot, k, SP_Q], sp_f[slot, k, SP_Q + 1],
+                     sp_f[slot, k, SP_Q + 2])
+    n = _frame_vector(src, n_planes, pose, sp_f[slot, k, SP_N], sp_f[slot, k, SP_N + 1],
+                      sp_f[slot, k, SP_N + 2])
+    return q, n
+
+
+@njit(cache=True, error_model="numpy")
+def _node_pen(sp_i, sp_f, i, src):
+    """Penetration (m, >= 0) of node ``i`` into the plane it has from ``src`` (0 if none), as
+    last evaluated."""
+    for k in range(SP_K):
+        if sp_i[i, k, SP_SRC] == src:
+            return max(sp_f[i, k, SP_PEN], 0.0)
+    return 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _law(src, n_planes, planes, par, mass, kmin, dt_ref):
+    """Penalty stiffness (N/m), damping (N s/m) and friction coefficients of a source."""
+    if src < n_planes:
+        k = planes[src, PL_K]
+        if planes[src, PL_AUTO] > 0.0:
+            k = max(mass * (0.2 / dt_ref) ** 2, kmin)
+        c = planes[src, PL_C]
+        if c < 0.0:
+            c = 2.0 * math.sqrt(k * mass)
+        return k, c, planes[src, PL_MUS], planes[src, PL_MUK]
+    col = src - n_planes
+    k, c = collider_penalty(par, col, mass, kmin, dt_ref)
+    return k, c, par[col, P_MUS], par[col, P_MUK]
+
+
+@njit(cache=True, error_model="numpy")
+def _add_contact_K(el_K, e, q, wn, wt, kn, ka, kb, n, sh):
+    """Add one contact's stiffness to block ``q`` of element ``e``: ``wn kn n n^T`` (normal)
+    plus ``wt`` times the friction's (``ka`` along the force direction ``sh``, ``kb`` across it
+    in the tangent plane)."""
+    for i in range(3):
+        for j in range(3):
+            tij = (1.0 if i == j else 0.0) - n[i] * n[j] - sh[i] * sh[j]
+            el_K[e, q, i, j] += wn * kn * n[i] * n[j] + wt * (ka * sh[i] * sh[j] + kb * tij)
+
+
+@njit(cache=True, error_model="numpy")
+def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i, sp_f, commit,
+                 stats) -> int:
+    """Add the contact forces of rod ``r``'s slot planes at the iterate (positions ``X``,
+    velocities ``V``; ``Xs`` the step start), their stiffness into ``el_K`` (per element: node
+    blocks a-a, b-a, b-b) and, with ``commit`` (accepted step), store the friction anchors and
+    the colliders' reactions; returns the contact count. ``stats[5]`` keeps the deepest start
+    penetration beyond what one step resolves (m)."""
+    mass, node_kmin, node_radius = rd.n1[N_MASS], rd.n1[N_NODE_KMIN], rd.n1[N_NODE_RADIUS]
+    force, contact_force, el_K = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE], rd.el_K
+    n_planes = planes.shape[0]
+    n_nodes = X.shape[0]
+    # Collider tables; without colliders arrays of the same types that are never read.
+    pose, twist, par = rd.e33[0], rd.n3[0], planes
+    has_cols = cols is not None
+    if has_cols:
+        pose, twist, par = cols.pose[r], cols.twist[r], cols.par
+        for c in range(cols.kind.shape[0]):
+            for j in range(6):
+                cols.wrench[r, c, j] = 0.0
+    count = 0
+    for k in range(nn + ne):
+        node = k < nn
+        e = -1
+        if node:
+            a = n0 + k
+            b = a
+            slot = a
+            radius = node_radius[a]
+        else:
+            e = e0 + k - nn
+            a = n0 + k - nn
+            b = a + 1 if k - nn + 1 < nn else n0
+            slot = n_nodes + e
+            radius = 0.5 * (node_radius[a] + node_radius[b])
+        for j in range(SP_K):
+            src = sp_i[slot, j, SP_SRC]
+            if src < 0:
+                continue
+            q, n = _plane_of(sp_f, slot, j, src, n_planes, pose)
+            s = sp_f[slot, j, SP_S]
+            wa = 1.0 - s
+            wb = s
+            x = (wa * X[a, 0] + wb * X[b, 0], wa * X[a, 1] + wb * X[b, 1],
+                 wa * X[a, 2] + wb * X[b, 2])
+            pen = radius - ((x[0] - q[0]) * n[0] + (x[1] - q[1]) * n[1] + (x[2] - q[2]) * n[2])
+            if not node:  # a segment: only what its nodes' contacts do not carry
+                pen -= wa * _node_pen(sp_i, sp_f, a, src) + wb * _node_pen(sp_i, sp_f, b, src)
+            sp_f[slot, j, SP_PEN] = pen
+            sp_f[slot, j, SP_FN] = 0.0
+            state = sp_i[slot, j, SP_SET]
+            if state == RELEASED or (state == INACTIVE and pen <= 0.0):
+                continue
+            d0 = sp_f[slot, j, SP_D0]
+            m = wa * mass[a] + wb * mass[b]
+            kmin = wa * node_kmin[a] + wb * node_kmin[b]
+            kc, cc, mu_s, mu_k = _law(src, n_planes, planes, par, m, kmin, dt_ref)
+            d_off = max(d0 - V_OUT * h, 0.0)
+            fn = kc * (pen - d_off) + cc * (pen - max(d0, 0.0)) / h
+            sp_f[slot, j, SP_FN] = fn
+            if state == INACTIVE:
+                if fn <= 0.0:
+                    continue
+                sp_i[slot, j, SP_SET] = ACTIVE
+            if commit and fn <= 0.0:
+                continue
+            if commit and d_off > stats[5]:
+                stats[5] = d_off
+            f = (fn * n[0], fn * n[1], fn * n[2])
+            ka = 0.0  # tangential stiffness along the friction force, and across it (N/m)
+            kb = 0.0
+            sh = (0.0, 0.0, 0.0)
+            ta = wa
+            sa = wb
+            if mu_s > 0.0 or mu_k > 0.0:
+                u = (wa * V[a, 0] + wb * V[b, 0], wa * V[a, 1] + wb * V[b, 1],
+                     wa * V[a, 2] + wb * V[b, 2])
+                vs = _surface_velocity(src, n_planes, pose, twist, q)
+                A = _frame_point(src, n_planes, pose, sp_f[slot, j, SP_A],
+                                 sp_f[slot, j, SP_A + 1], sp_f[slot, j, SP_A + 2])
+                w = (u[0] - vs[0], u[1] - vs[1], u[2] - vs[2])
+                # Friction holds the material point of a segment where the contact began.
+                sa = sp_f[slot, j, SP_AS] if not node else 0.0
+                ta = 1.0 - sa
+                pm = (ta * X[a, 0] + sa * X[b, 0], ta * X[a, 1] + sa * X[b, 1],
+                      ta * X[a, 2] + sa * X[b, 2])
+                wn = w[0] * n[0] + w[1] * n[1] + w[2] * n[2]
+                t0, t1, t2 = w[0] - wn * n[0], w[1] - wn * n[1], w[2] - wn * n[2]
+                d0_, d1_, d2_ = pm[0] - A[0], pm[1] - A[1], pm[2] - A[2]
+                dn = d0_ * n[0] + d1_ * n[1] + d2_ * n[2]
+                # Stick displacement from the anchor plus the tangential damping's share (m),
+                # and the friction it gives, saturated smoothly at mu N:
+                # |f_t| = mu N tanh(|s| / delta), delta = max(mu N / k, STICK_ZONE).
+                g = cc / kc
+                s0 = d0_ - dn * n[0] + g * t0
+                s1 = d1_ - dn * n[1] + g * t1
+                s2 = d2_ - dn * n[2] + g * t2
+                smag = math.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+                mu = mu_k if sp_i[slot, j, SP_SLIDING] != 0 else mu_s
+                limit = mu * max(fn, 0.0)
+                if limit > 0.0:
+                    delta = max(limit / kc, STICK_ZONE)
+                    kt = limit / delta * (1.0 + g / h)  # d|f_t|/dx at zero slip (N/m)
+                    ka = kb = kt
+                    if smag > 1e-300:
+                        y = smag / delta
+                        th = math.tanh(y)
+                        sh = (s0 / smag, s1 / smag, s2 / smag)
+                        scale = limit * th / smag
+                        f = (f[0] - scale * s0, f[1] - scale * s1, f[2] - scale * s2)
+                        # Secant stiffness (|f_t| / |s|) across and along the force: along it
+                        # the tangent kt (1 - th^2) vanishes once saturated, and Newton would
+                        # then overshoot the stick point and flip the friction every iterate.
+                        kb = kt * th / y
+                        ka = max(kt * (1.0 - th * th), kb)
+                        if commit:
+                            sliding = y > Y_SLIDE
+                            sp_i[slot, j, SP_SLIDING] = 1 if sliding else 0
+                            if sliding:  # the anchor trails the sliding point
+                                back = 1.0 - Y_ANCHOR / y
+                                A = (A[0] + back * s0, A[1] + back * s1, A[2] + back * s2)
+                if commit:
+                    la = _local_point(src, n_planes, pose, A[0], A[1], A[2])
+                    sp_f[slot, j, SP_A], sp_f[slot, j, SP_A + 1], sp_f[slot, j, SP_A + 2] = la
+                    sp_f[slot, j, SP_AS] = sa
+                    sp_i[slot, j, SP_ANCHORED] = 1
+            count += 1
+            fnn = f[0] * n[0] + f[1] * n[1] + f[2] * n[2]
+            for d in range(3):
+                ft = f[d] - fnn * n[d]
+                fa = wa * fnn * n[d] + ta * ft
+                force[a, d] += fa
+                contact_force[a, d] += fa
+                if not node:
+                    fb = wb * fnn * n[d] + sa * ft
+                    force[b, d] += fb
+                    contact_force[b, d] += fb
+            if has_cols and commit and src >= n_planes:
+                c = src - n_planes
+                rq = (q[0] - pose[c, 0, 3], q[1] - pose[c, 1, 3], q[2] - pose[c, 2, 3])
+                _add_reaction(cols.wrench, r, c, rq, f)
+            kn = kc + cc / h
+            if node:  # the node's diagonal block lives in an adjacent element's a-a / b-b
+                if k < ne:
+                    _add_contact_K(el_K, e0 + k, 0, 1.0, 1.0, kn, ka, kb, n, sh)
+                else:
+                    _add_contact_K(el_K, e0 + ne - 1, 2, 1.0, 1.0, kn, ka, kb, n, sh)
+            else:
+                _add_contact_K(el_K, e, 0, wa * wa, ta * ta, kn, ka, kb, n, sh)
+                _add_contact_K(el_K, e, 1, wa * wb, ta * sa, kn, ka, kb, n, sh)
+                _add_contact_K(el_K, e, 2, wb * wb, sa * sa, kn, ka, kb, n, sh)
+    return count
+
+
+@njit(cache=True, error_model="numpy")
+def start_penetrations(r, n0, nn, e0, ne, X, planes, rd, cols, sp_i, sp_f, n_nodes):
+    """Store each slot plane's penetration at the step start (``X``) as its ``d0``."""
+    node_radius = rd.n1[N_NODE_RADIUS]
+    n_planes = planes.shape[0]
+    pose = rd.e33[0]  # as in plane_forces
+    if cols is not None:
+        pose = cols.pose[r]
+    for k in range(nn + ne):
+        node = k < nn
+        e = -1
+        if node:
+            a = n0 + k
+            b = a
+            slot = a
+            radius = node_radius[a]
+        else:
+            e = e0 + k - nn
+            a = n0 + k - nn
+            b = a + 1 if k - nn + 1 < nn else n0
+            slot = n_nodes + e
+            radius = 0.5 * (node_radius[a] + node_radius[b])
+        for j in range(SP_K):
+            src = sp_i[slot, j, SP_SRC]
+            if src < 0:
+                continue
+            q, n = _plane_of(sp_f, slot, j, src, n_planes, pose)
+            s = sp_f[slot, j, SP_S]
+            x = ((1.0 - s) * X[a, 0] + s * X[b, 0], (1.0 - s) * X[a, 1] + s * X[b, 1],
+                 (1.0 - s) * X[a, 2] + s * X[b, 2])
+            pen = radius - ((x[0] - q[0]) * n[0] + (x[1] - q[1]) * n[1] + (x[2] - q[2]) * n[2])
+            if not node:
+                pen -= (1.0 - s) * _node_pen(sp_i, sp_f, a, src) + s * _node_pen(sp_i, sp_f, b, src)
+            sp_f[slot, j, SP_PEN] = pen
+            sp_f[slot, j, SP_D0] = pen
+
+
+@njit(cache=True, error_model="numpy")
+def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> None:
+    """Move predicted node positions ``X`` that penetrate their contact planes back onto them
+    (a Newton starting guess that already respects the contacts; ``fixed`` marks the
+    prescribed unknowns, node i's at 2 (i - n0), which stay where they are)."""
+    node_radius = rd.n1[N_NODE_RADIUS]
+    n_planes = planes.shape[0]
+    pose = rd.e33[0]  # as in plane_forces
+    if cols is not None:
+        pose = cols.pose[r]
+    for i in range(n0, n0 + nn):
+        if fixed[2 * (i - n0)]:
+            continue
+        for j in range(SP_K):
+            src = sp_i[i, j, SP_SRC]
+            if src < 0:
+                continue
+            q, n = _plane_of(sp_f, i, j, src, n_planes, pose)
+            pen = node_radius[i] - ((X[i, 0] - q[0]) * n[0] + (X[i, 1] - q[1]) * n[1]
+                                    + (X[i, 2] - q[2]) * n[2])
+            pen -= max(sp_f[i, j, SP_D0], 0.0)  # no deeper than it started
+            if pen > 0.0:
+                for d in range(3):
+                    X[i, d] += pen * n[d]
+
+
+@njit(cache=True, error_model="numpy")
+def release_pulling(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
+    """Release the active planes whose force pulls at the converged iterate; returns how many."""
+    released = 0
+    for k in range(nn + ne):
+        slot = n0 + k if k < nn else n_nodes + e0 + k - nn
+        for j in range(SP_K):
+            if sp_i[slot, j, SP_SET] == ACTIVE and sp_f[slot, j, SP_FN] < 0.0:
+                sp_i[slot, j, SP_SET] = RELEASED
+                released += 1
+    return released
