@@ -16,6 +16,7 @@ from . import assemble, running
 from . import validation as check
 from .contact import colliders as col
 from .contact.segments import P_AUTO, P_C, P_K, P_MUK, P_MUS
+from .contact.speculative import V_OUT
 from .drivers import Driver, DriverTable
 from .kernels import implicit, step, verlet
 from .kernels.bundles import SIM_DT, SIM_G, SIM_LEN, SIM_MAX_STRAIN, SIM_RR, SIM_SKIN, SIM_T, SIM_TOL
@@ -25,6 +26,8 @@ from .packing import Packed
 from .rod import Rod
 from .state import WorldState, put_rod, rod_slices, take_rod
 from .threads import MIN_THREADED_WORK, balanced_groups, default_threads, pool
+
+_log = logging.getLogger("deformx")
 
 if TYPE_CHECKING:
     from .recorder import Recorder
@@ -104,6 +107,8 @@ class World:
         self._stale_env = True
         self._drivers = DriverTable()
         self._pairs = np.zeros((64, 2), dtype=np.int64)
+        self._deep: np.ndarray | None = None
+        self._deep_warned: set[int] = set()
 
     # ------------------------------------------------------------------ building
     @property
@@ -337,6 +342,8 @@ class World:
         self._bufs = (rp.F, rp.I, self._env.F, self._env.I, None if cp is None else cp.F,
                       None if cp is None else cp.I)
         self._kernel = step.KERNELS[self.integrator, coupled]
+        # Deepest start penetration per rod beyond what a step resolves (stable integrator).
+        self._deep = self._rods_p["stats"][:, 5] if self.integrator == "stable" else None
         self._stale_env = False
 
     # ------------------------------------------------------------------ stepping
@@ -361,6 +368,19 @@ class World:
         if bad >= 0:
             self._raise_diverged(bad)
         self.time = t
+        if self._deep is not None and self._deep.max() > 0.0:
+            self._warn_deep()
+
+    def _warn_deep(self) -> None:
+        """One warning per rod found deeper inside a collider or plane than a step resolves
+        (it is pushed out at no more than 0.1 m/s; see contact/speculative.py)."""
+        for r in np.flatnonzero(self._deep > 0.0):
+            if r not in self._deep_warned:
+                self._deep_warned.add(int(r))
+                _log.warning("rod %d is %.3g m inside a collider or plane at t = %.4g s (more "
+                             "than a step resolves): pushing it out at <= %g m/s", r,
+                             self._deep[r], self.time, V_OUT)
+        self._deep[:] = 0.0
 
     def _advance_threaded(self, n_steps: int) -> tuple[float, int]:
         """Groups of rods on threads (each with its own copy of the drivers)."""

@@ -258,6 +258,17 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                     continue  # a segment's end: the node carries it
                 _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c, sd - radius,
                        q, n, s, pose, n_planes)
+                if node and cols.kind[c] != MESH and speed * h > 0.5 * radius:
+                    # A fast node on a curved shape: also the tangent plane where it is headed
+                    # (its free-flight end point), so that it cannot cut through the curve.
+                    pe = (pa[0] + h * V[a, 0], pa[1] + h * V[a, 1], pa[2] + h * V[a, 2])
+                    hit, s, sd, m, q = _shape_closest(c, cols.kind[c], pose, cols.par, pe, pe,
+                                                      reach)
+                    if hit and m[0] * n[0] + m[1] * n[1] + m[2] * n[2] < 0.99:
+                        gap = ((pa[0] - q[0]) * m[0] + (pa[1] - q[1]) * m[1]
+                               + (pa[2] - q[2]) * m[2]) - radius
+                        _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c, gap,
+                               q, m, 0.0, pose, n_planes)
         s0 = 0.0
         for j in range(SP_K):
             if keep_src[j] < 0:
@@ -327,7 +338,7 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
     velocities ``V``; ``Xs`` the step start), their stiffness into ``el_K`` (per element: node
     blocks a-a, b-a, b-b) and, with ``commit`` (accepted step), store the friction anchors and
     the colliders' reactions; returns the contact count. ``stats[5]`` keeps the deepest start
-    penetration beyond what one step resolves (m)."""
+    penetration (m) of a contact deeper than one step resolves and 20 % of the radius."""
     mass, node_kmin, node_radius = rd.n1[N_MASS], rd.n1[N_NODE_KMIN], rd.n1[N_NODE_RADIUS]
     force, contact_force, el_K = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE], rd.el_K
     n_planes = planes.shape[0]
@@ -386,8 +397,8 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                 sp_i[slot, j, SP_SET] = ACTIVE
             if commit and fn <= 0.0:
                 continue
-            if commit and d_off > stats[5]:
-                stats[5] = d_off
+            if commit and d_off > 0.0 and d0 > 0.2 * radius and d0 > stats[5]:
+                stats[5] = d0
             f = (fn * n[0], fn * n[1], fn * n[2])
             ka = 0.0  # tangential stiffness along the friction force, and across it (N/m)
             kb = 0.0

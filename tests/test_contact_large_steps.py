@@ -1,0 +1,191 @@
+"""Contact at the robot's time step (stable integrator, dt = 1e-2 s): no tunnelling, no step
+halvings, safe starts; and clear errors for bad mesh files.
+
+Depths are measured with analytic signed distances of the colliders written here (not the
+engine's queries), at five points along every segment, after every step.
+"""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+import trimesh
+
+import deformx as dx
+
+DT = 1e-2
+HEIGHT = 1.0  # m: impact at ~4.4 m/s
+
+
+def _box_sdf(Q, c, he):
+    q = np.abs(Q - c) - he
+    return np.linalg.norm(np.maximum(q, 0.0), axis=1) + np.minimum(q.max(axis=1), 0.0)
+
+
+def _segment_points(P, m=5):
+    s = np.linspace(0.0, 1.0, m)[:, None, None]
+    return (P[:-1][None] * (1.0 - s) + P[1:][None] * s).reshape(-1, 3)
+
+
+def _scene(kind: str, r: float, E: float, integrator: str = "stable", dt: float = DT,
+           z0: float = HEIGHT):
+    """A 0.4 m rope (40 elements) above a collider, the floor 0.3 m below it; returns the
+    world, the rope and the collider's signed distance (m, negative inside)."""
+    world = dx.World(dt=dt, integrator=integrator, rod_contact=False)
+    if kind == "plane":
+        world.add_plane()
+
+        def sdf(Q):
+            return Q[:, 2]
+    elif kind == "sheet":  # an open mesh of two triangles: no inside, either side holds
+        V = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float)
+        world.add_mesh((V, np.array([[0, 1, 2], [0, 2, 3]])))
+
+        def sdf(Q):
+            return np.abs(Q[:, 2])
+    elif kind in ("plate", "box", "slab"):
+        ext = {"plate": (1.0, 1.0, 0.002), "box": (0.3, 0.3, 0.1), "slab": (1.0, 1.0, 0.1)}[kind]
+        mesh = trimesh.creation.box(extents=ext)
+        mesh.apply_translation((0.0, 0.0, -ext[2] / 2))
+        world.add_mesh(mesh)
+        c, he = np.array([0.0, 0.0, -ext[2] / 2]), np.array(ext) / 2
+
+        def sdf(Q):
+            return _box_sdf(Q, c, he)
+    elif kind == "cylinder":  # radius 5 cm, axis along y, top at z = 0
+        R = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])
+        world.add_cylinder(radius=0.05, length=0.6, pose=((0.0, 0.0, -0.05), R))
+
+        def sdf(Q):
+            radial = np.hypot(Q[:, 0], Q[:, 2] + 0.05) - 0.05
+            axial = np.abs(Q[:, 1]) - 0.3
+            return (np.hypot(np.maximum(radial, 0), np.maximum(axial, 0))
+                    + np.minimum(np.maximum(radial, axial), 0))
+    else:
+        raise ValueError(kind)
+    world.add_plane(point=(0.0, 0.0, -0.3))
+    rope = world.add_rod(dx.Rod.straight(n_elements=40, start=(-0.2, 0.0, z0 + r),
+                                         direction=(1, 0, 0), length=0.4, radius=r,
+                                         density=1000.0, youngs_modulus=E, damping=1.0))
+    return world, rope, sdf
+
+
+CASES = [pytest.param(kind, r, E, id=f"{kind}-r{r * 1e3:g}mm-E{E:.0e}", marks=(
+    [pytest.mark.xfail(reason="a 1 mm rope of E = 1e5 whipping round the cylinder at 4.4 m/s "
+                              "sinks up to 2.6 mm into it (tangent planes, one per step and "
+                              "direction, cannot follow 50 degrees of wrap per step)",
+                       strict=True)] if (kind, r, E) == ("cylinder", 1e-3, 1e5) else
+    [pytest.mark.xfail(reason="a 1 mm rope of E = 1e5 folding over the box's edges reaches "
+                              "24 % of its radius", strict=True)]
+    if (kind, r, E) == ("box", 1e-3, 1e5) else []))
+    for kind in ("plane", "sheet", "plate", "box", "cylinder")
+    for r in (1e-3, 5e-3) for E in (1e5, 2e11)]
+# Not met yet: ropes sliding off the cylinder fast still halve 5-7 steps in 200.
+_HALVING = pytest.mark.xfail(reason="5-7 step halvings in 200 steps as the rope slides off the "
+                                    "cylinder (target: < 1 per 100)", strict=True)
+CASES = [pytest.param(*c.values, id=c.id, marks=list(c.marks) + (
+    [_HALVING] if c.values[0] == "cylinder" and c.values[1:] != (1e-3, 1e5) else []))
+    for c in CASES]
+
+
+@pytest.mark.parametrize("kind, r, E", CASES)
+def test_rope_dropped_at_large_steps_stays_outside(kind, r, E):
+    world, rope, sdf = _scene(kind, r, E)
+    worst = 0.0
+    for _ in range(200):  # impact at ~0.45 s, then 1.5 s to settle
+        world.step()
+        P = rope.positions
+        assert np.all(np.isfinite(P))
+        worst = max(worst, float((r - sdf(_segment_points(P))).max()))
+        assert P[:, 2].min() > -0.3, "passed through to the floor"
+    stats = world.solver_stats()
+    print(f"{kind} r={r} E={E:g}: depth {worst * 1e3:.3f} mm, {stats}")
+    assert worst <= 0.2 * r, f"{worst * 1e3:.3f} mm deep ({worst / r:.0%} of the radius)"
+    assert stats["halvings"] <= 1, stats  # fewer than one per 100 steps
+    if kind != "cylinder":  # on the cylinder a rope may slide off (without passing through)
+        assert np.abs(rope.velocities).max() < 0.05 and rope.positions[20, 2] > 0.0
+
+
+@pytest.mark.parametrize("kind, depth", [("plane", 0.0025), ("plane", 0.005),
+                                         ("plane", 0.0075), ("slab", 0.003)])
+def test_rope_starting_inside_is_pushed_out_gently(kind, depth, caplog):
+    """A rope placed ``depth`` into a collider (half its radius, centred on the surface, its
+    centreline below it) comes out at well under 0.5 m/s, and the world says so once."""
+    r = 0.005
+    world, rope, sdf = _scene(kind, r, 1e6, z0=-depth)
+    speed = 0.0
+    with caplog.at_level(logging.WARNING, logger="deformx"):
+        for _ in range(100):
+            world.step()
+            speed = max(speed, float(np.linalg.norm(rope.velocities, axis=1).max()))
+    warnings = [rec for rec in caplog.records if "inside a collider or plane" in rec.message]
+    assert len(warnings) == 1 and "rod 0" in warnings[0].message
+    assert speed < 0.5, f"launched at {speed:.3g} m/s"
+    assert sdf(rope.positions).min() > 0.8 * r  # out, resting on top
+
+
+@pytest.mark.xfail(reason="the explicit integrator's penalty still launches a rope placed "
+                          "inside the ground (issue 11: not done yet)", strict=True)
+def test_explicit_rope_starting_inside_is_not_launched():
+    world, rope, _ = _scene("plane", 0.005, 1e6, integrator="verlet", dt=2e-5, z0=-0.0075)
+    speed = 0.0
+    for _ in range(50):
+        world.step(50)
+        speed = max(speed, float(np.linalg.norm(rope.velocities, axis=1).max()))
+    assert speed < 0.5
+
+
+# ------------------------------------------------------------------ bad inputs
+def _write(path, data: bytes):
+    path.write_bytes(data)
+    return path
+
+
+@pytest.fixture
+def mesh_files(tmp_path):
+    box = trimesh.creation.box()
+    files = {}
+    for ext in ("obj", "stl", "ply", "glb"):
+        good = tmp_path / f"good.{ext}"
+        box.export(good)
+        data = good.read_bytes()
+        files[f"truncated {ext}"] = _write(tmp_path / f"truncated.{ext}", data[: len(data) // 3])
+        files[f"garbage {ext}"] = _write(tmp_path / f"garbage.{ext}", b"\x00\x13 not a mesh" * 5)
+        files[f"empty {ext}"] = _write(tmp_path / f"empty.{ext}", b"")
+    files["face index"] = _write(tmp_path / "index.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+    files["nan"] = _write(tmp_path / "nan.obj", b"v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n")
+    files["inf"] = _write(tmp_path / "inf.obj", b"v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n")
+    files["format"] = _write(tmp_path / "mesh.xyz", b"0 0 0\n")
+    return files
+
+
+def test_bad_mesh_files_give_a_value_error_naming_the_file(mesh_files):
+    world = dx.World()
+    for what, path in mesh_files.items():
+        with pytest.raises(ValueError) as err:
+            world.add_mesh(path)
+        assert path.name in str(err.value), what
+    assert not world.colliders
+
+
+def test_bad_mesh_arrays_are_refused():
+    world = dx.World()
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    with pytest.raises(ValueError, match="face indices"):
+        world.add_mesh((V, np.array([[0, 1, 3]])))
+    with pytest.raises(ValueError, match="NaN or infinite"):
+        world.add_mesh((np.array([[0.0, 0, 0], [1, 0, 0], [0, np.nan, 0]]),
+                        np.array([[0, 1, 2]])))
+    with pytest.raises(ValueError, match="integer"):
+        world.add_mesh((V, np.array([[0.0, 1.0, 2.0]])))
+
+
+def test_short_elements_and_short_runs_are_flagged():
+    world = dx.World(dt=1e-3)
+    with pytest.warns(UserWarning, match="tenth of the rod's radius"):
+        world.add_rod(dx.Rod.straight(n_elements=100, length=0.04, radius=0.005))
+    with pytest.warns(UserWarning, match="shorter than half a step"):
+        world.run(1e-4)
+    assert world.time == 0.0
