@@ -51,9 +51,9 @@ from .segments import (
 )
 
 SP_K = 2  # contact planes per query slot
-SP_COLS_I, SP_COLS_F = 4, 14
+SP_COLS_I, SP_COLS_F = 4, 15
 SP_SRC, SP_ANCHORED, SP_SLIDING, SP_SET = 0, 1, 2, 3
-SP_Q, SP_N, SP_S, SP_D0, SP_A, SP_AS, SP_PEN, SP_FN = 0, 3, 6, 7, 8, 11, 12, 13
+SP_Q, SP_N, SP_S, SP_D0, SP_A, SP_AS, SP_PEN, SP_FN, SP_OFF = 0, 3, 6, 7, 8, 11, 12, 13, 14
 # SP_SET: within a step a plane is inactive (0), active (1: its force law holds even if it
 # pulls, so that Newton sees a smooth problem) or released (2: it pulled at a converged solve)
 INACTIVE, ACTIVE, RELEASED = 0, 1, 2
@@ -149,9 +149,9 @@ def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
     old_on = (sp_i[slot, 0, SP_ANCHORED], sp_i[slot, 1, SP_ANCHORED])
     old_sliding = (sp_i[slot, 0, SP_SLIDING], sp_i[slot, 1, SP_SLIDING])
     old_a = ((sp_f[slot, 0, SP_A], sp_f[slot, 0, SP_A + 1], sp_f[slot, 0, SP_A + 2],
-              sp_f[slot, 0, SP_AS]),
+              sp_f[slot, 0, SP_AS], sp_f[slot, 0, SP_OFF]),
              (sp_f[slot, 1, SP_A], sp_f[slot, 1, SP_A + 1], sp_f[slot, 1, SP_A + 2],
-              sp_f[slot, 1, SP_AS]))
+              sp_f[slot, 1, SP_AS], sp_f[slot, 1, SP_OFF]))
     for k in range(SP_K):
         src = keep_src[k]
         sp_i[slot, k, SP_SRC] = src
@@ -169,6 +169,7 @@ def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
                 for d in range(3):
                     sp_f[slot, k, SP_A + d] = old_a[j][d]
                 sp_f[slot, k, SP_AS] = old_a[j][3]
+                sp_f[slot, k, SP_OFF] = old_a[j][4]
         if sp_i[slot, k, SP_ANCHORED] == 0:
             sp_f[slot, k, SP_A] = x_start[k, 0]
             sp_f[slot, k, SP_A + 1] = x_start[k, 1]
@@ -388,7 +389,7 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
             m = wa * mass[a] + wb * mass[b]
             kmin = wa * node_kmin[a] + wb * node_kmin[b]
             kc, cc, mu_s, mu_k = _law(src, n_planes, planes, par, m, kmin, dt_ref)
-            d_off = max(d0 - V_OUT * h, 0.0)
+            d_off = sp_f[slot, j, SP_OFF]
             fn = kc * (pen - d_off) + cc * (pen - max(d0, 0.0)) / h
             sp_f[slot, j, SP_FN] = fn
             if state == INACTIVE:
@@ -456,7 +457,8 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                     la = _local_point(src, n_planes, pose, A[0], A[1], A[2])
                     sp_f[slot, j, SP_A], sp_f[slot, j, SP_A + 1], sp_f[slot, j, SP_A + 2] = la
                     sp_f[slot, j, SP_AS] = sa
-                    sp_i[slot, j, SP_ANCHORED] = 1
+            if commit:  # in contact at the end of this step: anchor and offset carry over
+                sp_i[slot, j, SP_ANCHORED] = 1
             count += 1
             fnn = f[0] * n[0] + f[1] * n[1] + f[2] * n[2]
             for d in range(3):
@@ -486,8 +488,11 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
 
 
 @njit(cache=True, error_model="numpy")
-def start_penetrations(r, n0, nn, e0, ne, X, planes, rd, cols, sp_i, sp_f, n_nodes):
-    """Store each slot plane's penetration at the step start (``X``) as its ``d0``."""
+def start_penetrations(r, n0, nn, e0, ne, h, X, planes, rd, cols, sp_i, sp_f, n_nodes):
+    """Store each slot plane's penetration at the step start (``X``) as its ``d0``, and the
+    depth its force leaves alone this step (``SP_OFF``): for a plane new to the slot what lies
+    deeper than ``V_OUT h``, for one in contact at the last step its last offset less
+    ``V_OUT h`` (a point placed inside comes out at ``V_OUT``; an impact is not softened)."""
     node_radius = rd.n1[N_NODE_RADIUS]
     n_planes = planes.shape[0]
     pose = rd.e33[0]  # as in plane_forces
@@ -520,6 +525,8 @@ def start_penetrations(r, n0, nn, e0, ne, X, planes, rd, cols, sp_i, sp_f, n_nod
                 pen -= (1.0 - s) * _node_pen(sp_i, sp_f, a, src) + s * _node_pen(sp_i, sp_f, b, src)
             sp_f[slot, j, SP_PEN] = pen
             sp_f[slot, j, SP_D0] = pen
+            off = min(sp_f[slot, j, SP_OFF], pen) if sp_i[slot, j, SP_ANCHORED] != 0 else pen
+            sp_f[slot, j, SP_OFF] = max(off - V_OUT * h, 0.0)
 
 
 @njit(cache=True, error_model="numpy")

@@ -376,7 +376,7 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
             if gather_planes(r, n0, nn, e0, ne, hs, pos, vel, gravity, planes, rd, cols,
                              rd.sp_i, rd.sp_f, keep_src, keep_f, keep_n, x_start) > 0:
                 touching = True
-            start_penetrations(r, n0, nn, e0, ne, pos, planes, rd, cols, rd.sp_i, rd.sp_f,
+            start_penetrations(r, n0, nn, e0, ne, hs, pos, planes, rd, cols, rd.sp_i, rd.sp_f,
                                pos.shape[0])
         # Predictor: x + h v + h (v - v_prev), i.e. extrapolating the last step's acceleration
         # (vn still holds the previous step's start velocity): ~0.7 Newton iterations fewer on
