@@ -44,7 +44,7 @@ from numba import njit
 from ..kernels.bundles import (
     N_CONTACT_FORCE, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS,
 )
-from .plane import PL_AUTO, PL_C, PL_K, PL_MUK, PL_MUS
+from .plane import PL_MUK, PL_MUS, plane_penalty
 from .segments import (
     MESH, P_MUK, P_MUS, _add_reaction, _mesh_closest, _rotate, _shape_closest,
     _to_local, _to_world, collider_penalty,
@@ -177,6 +177,17 @@ def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
             sp_f[slot, k, SP_AS] = s_start
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _slot(k, n0, nn, e0, n_nodes, node_radius):
+    """The ``k``-th query of a rod (its nodes, then its elements): whether it is a node, its
+    end nodes a, b (a == b for a node), element (-1 for a node), slot and radius (m)."""
+    if k < nn:
+        return True, n0 + k, n0 + k, -1, n0 + k, node_radius[n0 + k]
+    a = n0 + k - nn
+    b = a + 1 if k - nn + 1 < nn else n0
+    return False, a, b, e0 + k - nn, n_nodes + e0 + k - nn, 0.5 * (node_radius[a] + node_radius[b])
+
+
 @njit(cache=True, error_model="numpy")
 def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, sp_f, keep_src,
                   keep_f, keep_n, x_start) -> int:
@@ -201,19 +212,7 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
         pose3 = cols.pose[r]
     found = 0
     for k in range(nn + ne):
-        node = k < nn
-        e = -1
-        if node:
-            a = n0 + k
-            b = a
-            slot = a
-            radius = node_radius[a]
-        else:
-            e = e0 + k - nn
-            a = n0 + k - nn
-            b = a + 1 if k - nn + 1 < nn else n0
-            slot = n_nodes + e
-            radius = 0.5 * (node_radius[a] + node_radius[b])
+        node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
         pa = (X[a, 0], X[a, 1], X[a, 2])
         pb = (X[b, 0], X[b, 1], X[b, 2])
         speed = max(math.sqrt(V[a, 0] ** 2 + V[a, 1] ** 2 + V[a, 2] ** 2),
@@ -309,12 +308,7 @@ def _node_pen(sp_i, sp_f, i, src):
 def _law(src, n_planes, planes, par, mass, kmin, dt_ref):
     """Penalty stiffness (N/m), damping (N s/m) and friction coefficients of a source."""
     if src < n_planes:
-        k = planes[src, PL_K]
-        if planes[src, PL_AUTO] > 0.0:
-            k = max(mass * (0.2 / dt_ref) ** 2, kmin)
-        c = planes[src, PL_C]
-        if c < 0.0:
-            c = 2.0 * math.sqrt(k * mass)
+        k, c = plane_penalty(planes, src, mass, kmin, dt_ref)
         return k, c, planes[src, PL_MUS], planes[src, PL_MUK]
     col = src - n_planes
     k, c = collider_penalty(par, col, mass, kmin, dt_ref)
@@ -354,19 +348,7 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                 cols.wrench[r, c, j] = 0.0
     count = 0
     for k in range(nn + ne):
-        node = k < nn
-        e = -1
-        if node:
-            a = n0 + k
-            b = a
-            slot = a
-            radius = node_radius[a]
-        else:
-            e = e0 + k - nn
-            a = n0 + k - nn
-            b = a + 1 if k - nn + 1 < nn else n0
-            slot = n_nodes + e
-            radius = 0.5 * (node_radius[a] + node_radius[b])
+        node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
         for j in range(SP_K):
             src = sp_i[slot, j, SP_SRC]
             if src < 0:
@@ -499,19 +481,7 @@ def start_penetrations(r, n0, nn, e0, ne, h, X, planes, rd, cols, sp_i, sp_f, n_
     if cols is not None:
         pose = cols.pose[r]
     for k in range(nn + ne):
-        node = k < nn
-        e = -1
-        if node:
-            a = n0 + k
-            b = a
-            slot = a
-            radius = node_radius[a]
-        else:
-            e = e0 + k - nn
-            a = n0 + k - nn
-            b = a + 1 if k - nn + 1 < nn else n0
-            slot = n_nodes + e
-            radius = 0.5 * (node_radius[a] + node_radius[b])
+        node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
         for j in range(SP_K):
             src = sp_i[slot, j, SP_SRC]
             if src < 0:
