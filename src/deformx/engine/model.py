@@ -47,6 +47,7 @@ def pack_rods(rods: Sequence, dt: float) -> Packed:
     b["dil"][:] = 1.0
     b["rate"][:] = 1.0
     b["sp_i"][..., 0] = -1  # no contact planes yet
+    b["pair_off"][:] = -1.0  # and no rod-rod contact
     b["seg_rod"][:] = -1
     b["excluded"][:] = 1
     segs, nodes = [], []

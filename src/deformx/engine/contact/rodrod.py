@@ -6,8 +6,9 @@ than half the skin; cost grows ~linearly with the number of segments. Pairs of o
 along the rod than ``excluded`` segments (neighbours, and those that overlap in the straight
 rest shape because the radius exceeds the element length) are left out.
 
-Narrow phase: exact closest points of the two segment axes; penetration ``d = r_i + r_j - |p_i
-- p_j|`` gives ``N = k d - c v_n`` along the line of centres, and regularised Coulomb friction
+Narrow phase of the explicit integrator (the stable one uses :mod:`.pairplanes`): exact
+closest points of the two segment axes; penetration ``d = r_i + r_j - |p_i - p_j|`` gives
+``N = k d - c v_n`` along the line of centres, and regularised Coulomb friction
 ``min(mu N, c |v_t|)`` against the relative sliding velocity. Both forces act equal and opposite
 on the two contact points and are spread on the nodes with the segments' linear weights, so
 momentum is conserved exactly.
@@ -22,7 +23,6 @@ from numba import njit
 
 from ..geometry.closest import closest_segment_segment
 from ..kernels.refcount import NO_REFCOUNT
-from .segments import _add_K
 from ..kernels.bundles import (
     E_EXCLUDED,
     E_SEG_A,
@@ -32,14 +32,8 @@ from ..kernels.bundles import (
     E_SEG_NE,
     E_SEG_RADIUS,
     E_SEG_ROD,
-    N_CONTACT_FORCE,
-    N_FORCE,
     N_MASS,
     N_NODE_KMIN,
-    N_POS,
-    N_VEL,
-    N_VP,
-    N_XP,
     R_GROUP,
 )
 
@@ -243,63 +237,4 @@ def pair_forces(pairs, n_pairs, rd, pos, vel, dt_ref, rr, out) -> int:
             out[b, d] += s * f[d]
             out[c_, d] -= (1.0 - t) * f[d]
             out[d_, d] -= t * f[d]
-    return touching
-
-
-@njit(cache=True, error_model="numpy")
-def _spread(force, contact_force, a, b, s, f, sign):
-    for d in range(3):
-        force[a, d] += sign * (1.0 - s) * f[d]
-        force[b, d] += sign * s * f[d]
-        contact_force[a, d] += sign * (1.0 - s) * f[d]
-        contact_force[b, d] += sign * s * f[d]
-
-
-@njit(cache=True, error_model="numpy")
-def _add_stiffness(el_K, e, s, kn, n):
-    """Normal contact stiffness ``kn n n^T`` at parameter s of element e (node blocks)."""
-    _add_K(el_K, e, 0, (1.0 - s) * (1.0 - s), kn, 0.0, n)
-    _add_K(el_K, e, 1, (1.0 - s) * s, kn, 0.0, n)
-    _add_K(el_K, e, 2, s * s, kn, 0.0, n)
-
-
-@njit(cache=True, error_model="numpy")
-def rod_pair_forces(r, pairs, n_pairs, rd, dt_ref, h, rr, want_K) -> int:
-    """Rod-rod contact forces on rod ``r`` for an implicit solve of that rod alone.
-
-    Its own segments are at the iterate (``pos``, ``vel``); other rods' segments at their
-    predicted positions ``xp`` and velocities ``vp`` for this step (each rod gets its share of
-    a pair when it is solved). Self-contact pairs act on both of their segments. With
-    ``want_K`` the normal stiffness ``k + c / h`` of each contact is added to ``el_K``.
-    """
-    pos, vel, xp, vp = rd.n3[N_POS], rd.n3[N_VEL], rd.n3[N_XP], rd.n3[N_VP]
-    seg_a, seg_b, seg_rod, radius = rd.ei[E_SEG_A], rd.ei[E_SEG_B], rd.ei[E_SEG_ROD], rd.e1[E_SEG_RADIUS]
-    mass, node_kmin = rd.n1[N_MASS], rd.n1[N_NODE_KMIN]
-    force, contact_force, el_K = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE], rd.el_K
-    touching = 0
-    for p in range(n_pairs):
-        i, j = pairs[p, 0], pairs[p, 1]
-        ri, rj = seg_rod[i], seg_rod[j]
-        if ri != r and rj != r:
-            continue
-        if ri == rj:
-            hit, s, t, f, n, k, c = pair_contact(i, j, seg_a, seg_b, radius, pos, pos, vel, vel,
-                                                 mass, node_kmin, dt_ref, rr[0], rr[1], rr[2])
-            if not hit:
-                continue
-            _spread(force, contact_force, seg_a[i], seg_b[i], s, f, 1.0)
-            _spread(force, contact_force, seg_a[j], seg_b[j], t, f, -1.0)
-            if want_K:
-                _add_stiffness(el_K, i, s, k + c / h, n)
-                _add_stiffness(el_K, j, t, k + c / h, n)
-        else:
-            own, other = (i, j) if ri == r else (j, i)
-            hit, s, t, f, n, k, c = pair_contact(own, other, seg_a, seg_b, radius, pos, xp, vel,
-                                                 vp, mass, node_kmin, dt_ref, rr[0], rr[1], rr[2])
-            if not hit:
-                continue
-            _spread(force, contact_force, seg_a[own], seg_b[own], s, f, 1.0)
-            if want_K:
-                _add_stiffness(el_K, own, s, k + c / h, n)
-        touching += 1
     return touching

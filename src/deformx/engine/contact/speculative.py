@@ -24,8 +24,9 @@ Newton sees no switch between stick and slip; the anchor is dragged along only b
 when a point ended its step sliding (which also selects ``mu_k`` over ``mu_s`` for the next one).
 
 Within a step a plane that has pushed stays active, its force law applied even where it would
-pull, until Newton has converged; planes that pull then are released and the solve goes on
-(an active set, so that contacts at the edge of touching cannot switch at every iterate).
+pull, until Newton has converged; planes that pull then are released (and released ones pressed
+in since re-engaged) and the solve goes on (an active set, so that contacts at the edge of
+touching cannot switch at every iterate; see ``switch_active``).
 
 Per query slot (node ``i``, element ``N + e``) up to ``SP_K`` planes from different sources
 (planes of the world, then colliders): ``sp_i[q, k]`` = (source, anchored, sliding at the last
@@ -51,12 +52,16 @@ from .segments import (
 )
 
 SP_K = 2  # contact planes per query slot
-SP_COLS_I, SP_COLS_F = 4, 15
-SP_SRC, SP_ANCHORED, SP_SLIDING, SP_SET = 0, 1, 2, 3
+SP_COLS_I, SP_COLS_F = 5, 15
+SP_SRC, SP_ANCHORED, SP_SLIDING, SP_SET, SP_FLIPS = 0, 1, 2, 3, 4
 SP_Q, SP_N, SP_S, SP_D0, SP_A, SP_AS, SP_PEN, SP_FN, SP_OFF = 0, 3, 6, 7, 8, 11, 12, 13, 14
-# SP_SET: within a step a plane is inactive (0), active (1: its force law holds even if it
-# pulls, so that Newton sees a smooth problem) or released (2: it pulled at a converged solve)
+# SP_SET: within a step a contact is inactive (0), active (1) or released (2: a plane that
+# pulled at a converged solve, out for the rest of the step); SP_FLIPS counts its switches.
 INACTIVE, ACTIVE, RELEASED = 0, 1, 2
+# Switches within a step before an active contact stays active: none for the planes (a stiff
+# wire on the floor would otherwise rock from iterate to iterate), two for rod-rod pairs
+# (contacts activated by a predictor that overlaps the other rod let go at once).
+PLANE_FLIPS, PAIR_FLIPS = 0, 2
 V_OUT = 0.1  # m/s: the fastest a point starting inside a collider is pushed out
 # Friction saturates as mu N tanh(y), y = |trial force| / (mu N); a step that ends beyond
 # Y_SLIDE counts as sliding (kinetic coefficient next step) and drags its anchor up to Y_ANCHOR
@@ -68,6 +73,19 @@ Y_SLIDE, Y_ANCHOR = 3.0, 1.0
 # finer than Newton resolves, and friction would then switch direction between iterates.
 STICK_ZONE = 1e-6
 MARGIN = 2.0  # the speculative margin is this many times the step's relative travel
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def switch_active(state, flips, fn, max_flips):
+    """(acts, state, flips) of a contact whose force law gives ``fn`` (N) at the iterate: it
+    acts where it pushes; after ``max_flips`` switches within the step an active contact
+    stays active (its force may pull until the solve has converged and it is released)."""
+    push = fn > 0.0
+    if state == RELEASED or push == (state == ACTIVE):
+        return push and state != RELEASED, state, flips
+    if state == ACTIVE and flips >= max_flips:
+        return True, state, flips
+    return push, ACTIVE if push else INACTIVE, flips + 1
 
 
 @njit(cache=True, error_model="numpy")
@@ -158,6 +176,7 @@ def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
         sp_i[slot, k, SP_SLIDING] = 0
         sp_i[slot, k, SP_ANCHORED] = 0
         sp_i[slot, k, SP_SET] = INACTIVE
+        sp_i[slot, k, SP_FLIPS] = 0
         if src < 0:
             continue
         for d in range(7):
@@ -374,10 +393,10 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
             d_off = sp_f[slot, j, SP_OFF]
             fn = kc * (pen - d_off) + cc * (pen - max(d0, 0.0)) / h
             sp_f[slot, j, SP_FN] = fn
-            if state == INACTIVE:
-                if fn <= 0.0:
-                    continue
-                sp_i[slot, j, SP_SET] = ACTIVE
+            push, sp_i[slot, j, SP_SET], sp_i[slot, j, SP_FLIPS] = switch_active(
+                state, sp_i[slot, j, SP_FLIPS], fn, PLANE_FLIPS)
+            if not push:
+                continue
             if commit and fn <= 0.0:
                 continue
             if commit and d_off > 0.0 and d0 > 0.2 * radius and d0 > stats[5]:
@@ -527,12 +546,19 @@ def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> None
 
 @njit(cache=True, error_model="numpy")
 def release_pulling(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
-    """Release the active planes whose force pulls at the converged iterate; returns how many."""
-    released = 0
+    """At a converged iterate: release the active planes whose force pulls, and re-engage
+    released planes that are now deeper than where their force starts (a release elsewhere
+    or another rod may have pressed them in since). Returns how many changed."""
+    count = 0
     for k in range(nn + ne):
         slot = n0 + k if k < nn else n_nodes + e0 + k - nn
         for j in range(SP_K):
-            if sp_i[slot, j, SP_SET] == ACTIVE and sp_f[slot, j, SP_FN] < 0.0:
+            state = sp_i[slot, j, SP_SET]
+            if state == ACTIVE and sp_f[slot, j, SP_FN] < 0.0:
                 sp_i[slot, j, SP_SET] = RELEASED
-                released += 1
-    return released
+                count += 1
+            elif state == RELEASED and sp_f[slot, j, SP_PEN] > max(
+                    sp_f[slot, j, SP_OFF], sp_f[slot, j, SP_D0], 0.0):
+                sp_i[slot, j, SP_SET] = ACTIVE
+                count += 1
+    return count

@@ -31,21 +31,21 @@ from numba.extending import overload
 # which keeps numba's compile time down (it grows with every array of every signature).
 # State rows come first in each stack: positions, velocities, frames, angular velocities;
 # the stable integrator's step start, predictor rates, viscous loads, contact planes and
-# friction anchors, last step and contraction rate; the rod-rod Verlet list's reference
-# positions and (pairs, valid, builds, touching).
+# friction anchors, rod-rod contact offsets, last step and contraction rate; the rod-rod
+# Verlet list's reference positions and (pairs, valid, builds, touching).
 ROD_ARRAYS = (
-    ('n3', 'f', (12, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'ref', 'fext', 'force',
-                              'contact_force', 'xp', 'vp', 'extra'), 6),
+    ('n3', 'f', (11, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'ref', 'fext', 'force',
+                              'contact_force', 'xp', 'extra'), 6),
     ('e3', 'f', (10, 'E', 3), ('omega', 'wn', 'tn_el', 'J', 'inv_J', 'S', 'rest_sigma', 'text',
                               'torque', 'stress'), 3),
     ('e33', 'f', (2, 'E', 3, 3), ('Q', 'Qn'), 2),
     ('v3', 'f', (6, 'V', 3), ('B', 'rest_kappa', 'kappa', 'couple', 'scr_C', 'scr_X'), 0),
     ('n1', 'f', (3, 'N'), ('mass', 'node_radius', 'node_kmin'), 0),
-    ('e1', 'f', (4, 'E'), ('rest_len', 'seg_radius', 'dil', 'scr_edot'), 0),
+    ('e1', 'f', (5, 'E'), ('pair_off', 'rest_len', 'seg_radius', 'dil', 'scr_edot'), 1),
     ('v1', 'f', (1, 'V'), ('rest_vor',), 0),
     ('r1', 'f', (6, 'R'), ('h_prev', 'rate', 'decay', 'nu', 'tau', 'times'), 2),
     # The stable integrator's contact planes per query slot (see contact/speculative.py).
-    ('sp_i', 'i', ('Q', 2, 4), None, 1),
+    ('sp_i', 'i', ('Q', 2, 5), None, 1),
     ('ei', 'i', (7, 'E'), ('seg_a', 'seg_b', 'seg_rod', 'seg_k', 'seg_ne', 'seg_closed',
                           'excluded'), 0),
     ('ri', 'i', (6, 'R'), ('node0', 'elem0', 'vor0', 'ne', 'closed', 'group'), 0),
@@ -58,13 +58,13 @@ ROD_ARRAYS = (
     ('nodes', 'i', ('M',), None, 0),
 )
 # Row indices of the stacked rod fields.
-(N_POS, N_VEL, N_XN, N_VN, N_FN_EL, N_REF, N_FEXT, N_FORCE, N_CONTACT_FORCE, N_XP, N_VP,
- N_EXTRA) = range(12)
+(N_POS, N_VEL, N_XN, N_VN, N_FN_EL, N_REF, N_FEXT, N_FORCE, N_CONTACT_FORCE, N_XP,
+ N_EXTRA) = range(11)
 E_OMEGA, E_WN, E_TN_EL, E_J, E_INV_J, E_S, E_REST_SIGMA, E_TEXT, E_TORQUE, E_STRESS = range(10)
 E_Q, E_QN = 0, 1
 V_B, V_REST_KAPPA, V_KAPPA, V_COUPLE, V_SCR_C, V_SCR_X = 0, 1, 2, 3, 4, 5
 N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2
-E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3
+E_PAIR_OFF, E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3, 4
 V_REST_VOR = 0
 R_H_PREV, R_RATE, R_DECAY, R_NU, R_TAU, R_TIMES = 0, 1, 2, 3, 4, 5
 E_SEG_A, E_SEG_B, E_SEG_ROD, E_SEG_K, E_SEG_NE, E_SEG_CLOSED, E_EXCLUDED = 0, 1, 2, 3, 4, 5, 6

@@ -7,19 +7,23 @@ when a node has moved more than half the skin) and then advances every rod by on
 * explicit: the pair forces are computed once at the step's mid-point positions ``x + dt/2 v``
   (where position Verlet evaluates forces) and applied equal and opposite, so momentum is
   conserved exactly;
-* stable: each rod's Newton solve treats its own segments implicitly and the other rods at their
-  predicted positions ``x + dt v`` (a block Jacobi splitting between rods).
+* stable: pairs get separating planes at the step start, and rods linked by pairs that can
+  touch within the step are solved together as one Newton system (an island), so each sees
+  the others' end-of-step positions.
 """
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
+from ..contact.pairplanes import PP_COLS, PS_COLS, PS_NEAR, pair_plane
 from ..contact.rodrod import build_pairs, max_displacement, pair_forces
 from .bundles import (
-    N_EXTRA, N_POS, N_REF, N_VEL, N_VP, N_XP, R_NE, R_TIMES, SIM_DT, SIM_RR, SIM_SKIN,
+    E_SEG_ROD, N_EXTRA, N_POS, N_REF, N_VEL, N_XP, R_NE, R_TIMES, SIM_DT, SIM_G, SIM_RR,
+    SIM_SKIN,
 )
-from .implicit import advance_rod_implicit
+from .implicit import advance_island_implicit
 from .refcount import NO_REFCOUNT
 from .verlet import OK, advance_rod
 
@@ -82,24 +86,78 @@ def advance_world_verlet(n_steps, t, sim, rd, env, cols, pairs):
 
 
 @njit(cache=True, error_model="numpy")
+def _find(parent, r):
+    while parent[r] != r:
+        parent[r] = parent[parent[r]]
+        r = parent[r]
+    return r
+
+
+@njit(cache=True, error_model="numpy")
 def advance_world_implicit(n_steps, t, sim, opts, rd, env, cols, pairs):
-    """Advance all rods ``n_steps`` stable steps with rod-rod contact; returns the pairs."""
+    """Advance all rods ``n_steps`` stable steps with rod-rod contact; returns the pairs.
+
+    Each step: candidate pairs over the swept boxes, their separating planes at the step start
+    (:mod:`..contact.pairplanes`), islands of rods linked by pairs near enough to touch within
+    the step, and each island solved as one system (``advance_island_implicit``)."""
     dt = sim[SIM_DT]
-    pos, vel, xp, vp, nodes = rd.n3[N_POS], rd.n3[N_VEL], rd.n3[N_XP], rd.n3[N_VP], rd.nodes
+    g = sim[SIM_G:SIM_G + 3]
+    pos, vel, xp, nodes = rd.n3[N_POS], rd.n3[N_VEL], rd.n3[N_XP], rd.nodes
+    seg_rod = rd.ei[E_SEG_ROD]
     n_rods = rd.ri[R_NE].shape[0]
+    parent = np.empty(n_rods, dtype=np.int64)
+    size = np.empty(n_rods, dtype=np.int64)
+    npairs = np.empty(n_rods, dtype=np.int64)
     for step in range(n_steps):
         for i in nodes:
             for d in range(3):
-                xp[i, d] = pos[i, d] + dt * vel[i, d]
-                vp[i, d] = vel[i, d]
+                xp[i, d] = pos[i, d] + dt * (vel[i, d] + dt * g[d])
         # The boxes span the step's start and predicted end: the Newton iterates lie between.
         pairs = _refresh_pairs(pos, xp, sim[SIM_SKIN], True, rd, pairs)
+        n_pairs = rd.pair_state[0]
+        pp = np.empty((n_pairs, PP_COLS))
+        ps = np.empty((n_pairs, PS_COLS), dtype=np.int64)
         for r in range(n_rods):
-            rd.r1[R_TIMES][r] = advance_rod_implicit(r, 1, t, sim, opts, rd, env, cols,
-                                               env.dloc[r], pairs, rd.pair_state[0])
-            if rd.status[r, 0] != OK:
-                rd.status[r, 2] = step
-                return pairs
+            parent[r] = r
+            size[r] = 0
+            npairs[r] = 0
+        touching = 0
+        for p in range(n_pairs):
+            pair_plane(p, pairs, rd, pos, xp, dt, sim[SIM_RR:SIM_RR + 3], pp, ps)
+            if ps[p, PS_NEAR]:
+                touching += 1
+                a = _find(parent, seg_rod[pairs[p, 0]])
+                b = _find(parent, seg_rod[pairs[p, 1]])
+                if a != b:
+                    parent[max(a, b)] = min(a, b)
+        rd.pair_state[3] = touching
+        for r in range(n_rods):
+            size[_find(parent, r)] += 1
+        for p in range(n_pairs):
+            if ps[p, PS_NEAR]:
+                npairs[_find(parent, seg_rod[pairs[p, 0]])] += 1
+        for root in range(n_rods):
+            if parent[root] != root:
+                continue
+            isl = np.empty(size[root], dtype=np.int64)
+            k = 0
+            for r in range(n_rods):
+                if _find(parent, r) == root:
+                    isl[k] = r
+                    k += 1
+            plist = np.empty(npairs[root], dtype=np.int64)
+            k = 0
+            for p in range(n_pairs):
+                if ps[p, PS_NEAR] and _find(parent, seg_rod[pairs[p, 0]]) == root:
+                    plist[k] = p
+                    k += 1
+            t_isl = advance_island_implicit(isl, 1, t, sim, opts, rd, env, cols,
+                                            (pairs, plist, pp, ps))
+            for r in isl:
+                rd.r1[R_TIMES][r] = t_isl
+                if rd.status[r, 0] != OK:
+                    rd.status[r, 2] = step
+                    return pairs
         t = rd.r1[R_TIMES][0]
     for r in range(n_rods):
         rd.status[r, 2] = n_steps

@@ -29,16 +29,18 @@ import math
 import numpy as np
 from numba import njit
 
-from ..contact.rodrod import rod_pair_forces
+from ..contact.pairplanes import (PP_COLS, PS_COLS, commit_pairs, pair_plane, pair_plane_forces,
+                                  release_pulling_pairs)
 from ..contact.speculative import (SP_K, gather_planes, plane_forces, project_predictor,
                                    release_pulling, start_penetrations)
 from .banded import BLOCK_BAND, add_lower, block_cholesky, block_solve, store_block
+from .lowrank import lowrank_apply, lowrank_factor
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
 from .bundles import (
-    E_DIL, E_J, E_OMEGA, E_Q, E_QN, E_REST_LEN, E_S, E_SEG_ROD, E_STRESS, E_TEXT, E_TN_EL,
+    E_DIL, E_J, E_OMEGA, E_PAIR_OFF, E_Q, E_QN, E_REST_LEN, E_S, E_STRESS, E_TEXT, E_TN_EL,
     E_TORQUE, E_WN, N_CONTACT_FORCE,
-    N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VEL, N_VN, N_XN,
+    N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VEL, N_VN, N_XN, N_XP,
     OPT_ITER, R_CLOSED, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU, R_TIMES, R_VOR0,
     SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_RR, SIM_TOL, V_B, V_KAPPA, V_REST_VOR,
 )
@@ -63,6 +65,7 @@ N_STATS = 5
 CHORD_RATE = 0.1  # reuse the factor while each update is below this fraction of the last
 EARLY_LIMIT = 10.0  # one-iteration steps only when the update is within this many tolerances
 MAX_SET_ROUNDS = 4  # contact releases per step before the set is frozen
+MAX_PAIR_ROUNDS = 6  # and for rod-rod pairs (a pile lets go of more, one layer at a time)
 ACCEPT = 1e-2  # an unconverged update above this fraction of an element length is rejected
 MAX_REFINE = 64.0  # a step is halved at most down to dt / MAX_REFINE before giving up
 # Past the iteration cap Newton goes on, up to EXTEND times the cap, while each update is at
@@ -235,11 +238,11 @@ def _assemble(h, ext, rd, nu, kv, geometric, A):
 
 
 @njit(cache=True, error_model="numpy")
-def _rod_contacts(r, ext, h, rd, planes, cols, pairs, n_pairs, rr, commit):
-    """All contact forces of rod ``r`` at the iterate (its slot planes against world planes,
-    meshes and primitives; rod-rod pairs) into ``force`` and ``contact_force``, their stiffness
-    into ``el_K``; ``commit`` (accepted step) stores the friction anchors and reactions.
-    Returns a count of the active contacts (planes + 1000003 pairs) that changes when they do."""
+def _rod_contacts(r, ext, h, rd, planes, cols, commit):
+    """Contact forces of rod ``r``'s slot planes (world planes, meshes, primitives) at the
+    iterate into ``force`` and ``contact_force`` (cleared first), their stiffness into
+    ``el_K``; ``commit`` (accepted step) stores the friction anchors and reactions. Returns
+    the number of active contacts (it changes when they do)."""
     n0, e0, _, ne, nn, _, _ = ext
     contact_force, el_K = rd.n3[N_CONTACT_FORCE], rd.el_K
     for i in range(n0, n0 + nn):
@@ -250,15 +253,11 @@ def _rod_contacts(r, ext, h, rd, planes, cols, pairs, n_pairs, rr, commit):
             for i in range(3):
                 for j in range(3):
                     el_K[e, q, i, j] = 0.0
+    if planes.shape[0] == 0 and cols is None:
+        return 0
     # As stiff as the explicit integrator's contact at dt <= 1e-4 s.
-    dt_ref = min(h, 1e-4)
-    count = 0
-    if planes.shape[0] > 0 or cols is not None:
-        count += plane_forces(r, n0, nn, e0, ne, h, dt_ref, rd.n3[N_POS], rd.n3[N_XN], rd.n3[N_VEL],
-                     planes, rd, cols, rd.sp_i, rd.sp_f, commit, rd.stats[r])
-    if n_pairs > 0:
-        count += 1000003 * rod_pair_forces(r, pairs, n_pairs, rd, dt_ref, h, rr, True)
-    return count
+    return plane_forces(r, n0, nn, e0, ne, h, min(h, 1e-4), rd.n3[N_POS], rd.n3[N_XN],
+                        rd.n3[N_VEL], planes, rd, cols, rd.sp_i, rd.sp_f, commit, rd.stats[r])
 
 
 @njit(cache=True, error_model="numpy")
@@ -295,18 +294,28 @@ def _implied_rates(n0, nn, e0, ne, inv_h, pos, xn, Q, Qn, vel, omega):
         omega[e, 2] = w2 * inv_h
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _extent(rd, r):
+    return rod_extent(r, rd.ri[R_NODE0], rd.ri[R_ELEM0], rd.ri[R_VOR0], rd.ri[R_NE], rd.ri[R_CLOSED])
+
+
 @njit(cache=True, error_model="numpy")
-def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_pairs):
-    """Advance rod ``r`` by ``n_steps`` backward-Euler steps of ``dt``; returns the new time.
+def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
+    """Advance the rods ``isl`` (one, or several in contact with each other) together by
+    ``n_steps`` backward-Euler steps of ``dt``; returns the new time.
 
     ``rod_nu`` is the uniform damping rate (1/s), ``rod_tau`` the Kelvin-Voigt retardation
     time (s): internal loads become F + tau dF/dt with dF/dt ~ (F - F_n) / h.
 
-    Contact with meshes and primitives (``cols``) and rod-rod contact (the candidate ``pairs``;
-    other rods at their predicted positions ``xp``) enter each Newton iteration through force
-    and stiffness (``el_K``: per element, node blocks a-a, b-a, b-b). Bundles as for the
-    explicit ``advance_rod``; ``dl`` the drivers as this rod sees them (advanced here).
+    Contact with planes, meshes and primitives enters each rod's Newton iteration through
+    force and stiffness (``el_K``: per element, node blocks a-a, b-a, b-b). Rod-rod contacts
+    ``pc`` = (pairs, the island's pairs ``plist``, their planes ``pp``, ``ps``) couple the
+    rods' systems, solved exactly as banded factors plus a low-rank term (:mod:`.lowrank`):
+    the rods share one Newton iteration, so each sees the others' end-of-step positions.
+    Each rod sees the drivers as ``env.dloc[r]`` (advanced here).
     """
+    pairs, plist, pp, ps = pc
+    m = plist.shape[0]
     dt = sim[SIM_DT]
     gravity = sim[SIM_G:SIM_G + 3]
     max_strain, tol, max_iter = sim[SIM_MAX_STRAIN], sim[SIM_TOL], opts[OPT_ITER]
@@ -314,110 +323,150 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
     rod_nu, rod_tau = rd.r1[R_NU], rd.r1[R_TAU]
     pos, vel, Q, omega = rd.n3[N_POS], rd.n3[N_VEL], rd.e33[E_Q], rd.e3[E_OMEGA]
     xn, vn, Qn, wn, fn_el, tn_el = rd.n3[N_XN], rd.n3[N_VN], rd.e33[E_QN], rd.e3[E_WN], rd.n3[N_FN_EL], rd.e3[E_TN_EL]
-    h_prev, rate = rd.r1[R_H_PREV], rd.r1[R_RATE]
+    h_prev, rate, pair_off = rd.r1[R_H_PREV], rd.r1[R_RATE], rd.e1[E_PAIR_OFF]
     mass, J, rest_len, rest_vor = rd.n1[N_MASS], rd.e3[E_J], rd.e1[E_REST_LEN], rd.v1[V_REST_VOR]
-    seg_rod, fext, text = rd.ei[E_SEG_ROD], rd.n3[N_FEXT], rd.e3[E_TEXT]
+    fext, text, xp = rd.n3[N_FEXT], rd.e3[E_TEXT], rd.n3[N_XP]
     force, torque, dil, kappa = rd.n3[N_FORCE], rd.e3[E_TORQUE], rd.e1[E_DIL], rd.v3[V_KAPPA]
     el_K, stats, status = rd.el_K, rd.stats, rd.status
     planes = env.planes
     h = dt
-    ext = rod_extent(r, rd.ri[R_NODE0], rd.ri[R_ELEM0], rd.ri[R_VOR0], rd.ri[R_NE], rd.ri[R_CLOSED])
-    n0, e0, v0, ne, nn, nv, closed = ext
-    c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
-    f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
-    clamped = c1 > c0 or f1 > f0
-    nu = rod_nu[r]
-    tau = rod_tau[r]
-    nb = 2 * ne + (0 if closed else 1)
-    A = np.zeros((nb, BLOCK_BAND + 1, 3, 3))
-    rhs = np.zeros((nb, 3))
-    fixed = np.zeros(nb, dtype=np.bool_)
+    K = isl.shape[0]
+    # The island's system stacks its rods' block rows; per rod its offsets in the stack,
+    # mean element length (the update's scale) and last accepted sub-step.
+    boff = np.zeros(K + 1, dtype=np.int64)
+    noff = np.zeros(K + 1, dtype=np.int64)
+    eoff = np.zeros(K + 1, dtype=np.int64)
+    scale = np.empty(K)
+    last_hs = np.empty(K)
+    upd = np.zeros(K)
+    prev_upd = np.zeros(K)
+    for k in range(K):
+        r = isl[k]
+        n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
+        boff[k + 1] = boff[k] + 2 * ne + (0 if closed else 1)
+        noff[k + 1] = noff[k] + nn
+        eoff[k + 1] = eoff[k] + ne
+        length = 0.0
+        for e in range(e0, e0 + ne):
+            length += rest_len[e]
+        scale[k] = length / ne
+        last_hs[k] = h_prev[r]
+    nbt = boff[K]
+    A = np.zeros((nbt, BLOCK_BAND + 1, 3, 3))
+    rhs = np.zeros((nbt, 3))
+    fixed = np.zeros(nbt, dtype=np.bool_)
+    acc = np.zeros((noff[K], 3))  # predictor: h * (last step's acceleration), per node
+    alpha = np.zeros((eoff[K], 3))  # and per element
+    # Clamped unknowns: their values are prescribed, so their rows/columns drop out.
+    for k in range(K):
+        r = isl[k]
+        n0, e0 = rd.ri[R_NODE0][r], rd.ri[R_ELEM0][r]
+        for c in range(env.rod_pcon[r], env.rod_pcon[r + 1]):
+            fixed[boff[k] + 2 * (env.pcon_node[c] - n0)] = True
+        for c in range(env.rod_fcon[r], env.rod_fcon[r + 1]):
+            fixed[boff[k] + 2 * (env.fcon_elem[c] - e0) + 1] = True
     has_planes = planes.shape[0] > 0
     n_cols = 0
     if cols is not None:  # None without colliders (the branch is pruned at compile time)
         n_cols = cols.kind.shape[0]
-    own_pairs = 0
-    for p in range(n_pairs):
-        if seg_rod[pairs[p, 0]] == r or seg_rod[pairs[p, 1]] == r:
-            own_pairs += 1
-    # Contact planes per slot (see contact/speculative.py) and their scratch.
     sources = has_planes or n_cols > 0
-    any_contact = sources or own_pairs > 0
+    any_contact = sources or m > 0
+    # Contact planes per slot (see contact/speculative.py) and their scratch.
     keep_src = np.empty(SP_K, dtype=np.int64)
     keep_f = np.empty(SP_K)
     keep_n = np.empty((SP_K, 8))
     x_start = np.empty((SP_K, 3))
-    acc = np.zeros((nn, 3))  # predictor: h * (last step's acceleration), per node
-    alpha = np.zeros((ne, 3))  # and per element
-    # Clamped unknowns: their values are prescribed, so their rows/columns drop out.
-    for c in range(c0, c1):
-        fixed[2 * (env.pcon_node[c] - n0)] = True
-    for c in range(f0, f1):
-        fixed[2 * (env.fcon_elem[c] - e0) + 1] = True
-    length_scale = 0.0
-    for k in range(ne):
-        length_scale += rest_len[e0 + k]
-    length_scale /= ne
+    # Rod-rod contacts: each node's block in the stack and rod slot, the low-rank terms.
+    node_block = np.zeros(pos.shape[0] if m > 0 else 0, dtype=np.int64)
+    node_rod = np.zeros(pos.shape[0] if m > 0 else 0, dtype=np.int64)
+    if m > 0:
+        for k in range(K):
+            n0, nn = rd.ri[R_NODE0][isl[k]], _extent(rd, isl[k])[4]
+            for i in range(nn):
+                node_block[n0 + i] = boff[k] + 2 * i
+                node_rod[n0 + i] = k
+    Z = np.zeros((3 * m, nbt if m > 0 else 0, 3))
+    S = np.zeros((3 * m, 3 * m))
+    act = np.zeros(3 * m, dtype=np.int64)  # per pair a normal column, two with friction
+    cdir = np.zeros((3 * m, 3))
+    ck = np.zeros(3 * m)
+    u = np.zeros(3 * m)
+    n_act = 0
 
     done = 0  # full steps completed
     hs = h  # current sub-step (halved when Newton fails, back to h at each full step)
     elapsed = 0.0  # time done within the current full step
-    last_hs = h_prev[r]  # last accepted sub-step (0: no usable acceleration yet)
     fresh_step = True  # the drivers' rates of a new full step are still to be set
     while done < n_steps:
         if fresh_step:
-            step_rod_drivers(dl, dt, r, env, cols, False)
+            for k in range(K):
+                step_rod_drivers(env.dloc[isl[k]], dt, isl[k], env, cols, False)
             fresh_step = False
         # Contact planes of this step, found at its start (colliders at their start poses).
-        touching = own_pairs > 0
-        if sources:
-            if cols is not None:
-                collider_poses(r, elapsed, cols, dl)
-            if gather_planes(r, n0, nn, e0, ne, hs, pos, vel, gravity, planes, rd, cols,
-                             rd.sp_i, rd.sp_f, keep_src, keep_f, keep_n, x_start) > 0:
-                touching = True
-            start_penetrations(r, n0, nn, e0, ne, hs, pos, planes, rd, cols, rd.sp_i, rd.sp_f,
-                               pos.shape[0])
-        # Predictor: x + h v + h (v - v_prev), i.e. extrapolating the last step's acceleration
-        # (vn still holds the previous step's start velocity): ~0.7 Newton iterations fewer on
-        # smooth motion. Contact makes velocities jump and then this misleads Newton, so a rod
-        # near a contact only gets a small third-order term h^2 (v - v_prev).
-        extrapolate = 0.0 if last_hs != hs else (hs if touching else 1.0)
-        for i in range(n0, n0 + nn):
-            for d in range(3):
-                accel_term = extrapolate * (vel[i, d] - vn[i, d])
-                xn[i, d] = pos[i, d]
-                vn[i, d] = vel[i, d]
-                acc[i - n0, d] = accel_term
-        for e in range(e0, e0 + ne):
-            for a in range(3):
-                alpha[e - e0, a] = extrapolate * (omega[e, a] - wn[e, a])
-                wn[e, a] = omega[e, a]
-                for b in range(3):
-                    Qn[e, a, b] = Q[e, a, b]
-        kv = 1.0 + tau / hs
-        inv_hs = 1.0 / hs  # the per-node and per-element loops multiply
-        if tau > 0.0:  # internal loads at the step start, for the viscous (rate) term
-            rod_internal_loads(r, rd)
+        touching = m > 0
+        for k in range(K):
+            r = isl[k]
+            n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
+            if sources:
+                if cols is not None:
+                    collider_poses(r, elapsed, cols, env.dloc[r])
+                if gather_planes(r, n0, nn, e0, ne, hs, pos, vel, gravity, planes, rd, cols,
+                                 rd.sp_i, rd.sp_f, keep_src, keep_f, keep_n, x_start) > 0:
+                    touching = True
+                start_penetrations(r, n0, nn, e0, ne, hs, pos, planes, rd, cols, rd.sp_i,
+                                   rd.sp_f, pos.shape[0])
+        for q in range(m):
+            pair_plane(plist[q], pairs, rd, pos, xp, hs, rr, pp, ps)
+        for k in range(K):
+            r = isl[k]
+            n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
+            # Predictor: x + h v + h (v - v_prev), i.e. extrapolating the last step's
+            # acceleration (vn still holds the previous step's start velocity): ~0.7 Newton
+            # iterations fewer on smooth motion. Contact makes velocities jump and then this
+            # misleads Newton, so a rod near a contact only gets a small third-order term
+            # h^2 (v - v_prev).
+            extrapolate = 0.0 if last_hs[k] != hs else (hs if touching else 1.0)
             for i in range(n0, n0 + nn):
                 for d in range(3):
-                    fn_el[i, d] = force[i, d]
+                    acc[noff[k] + i - n0, d] = extrapolate * (vel[i, d] - vn[i, d])
+                    xn[i, d] = pos[i, d]
+                    vn[i, d] = vel[i, d]
             for e in range(e0, e0 + ne):
+                for a in range(3):
+                    alpha[eoff[k] + e - e0, a] = extrapolate * (omega[e, a] - wn[e, a])
+                    wn[e, a] = omega[e, a]
+                    for b in range(3):
+                        Qn[e, a, b] = Q[e, a, b]
+            if rod_tau[r] > 0.0:  # internal loads at the step start, for the viscous term
+                rod_internal_loads(r, rd)
+                for i in range(n0, n0 + nn):
+                    for d in range(3):
+                        fn_el[i, d] = force[i, d]
+                for e in range(e0, e0 + ne):
+                    for d in range(3):
+                        tn_el[e, d] = torque[e, d]
+            for i in range(n0, n0 + nn):
                 for d in range(3):
-                    tn_el[e, d] = torque[e, d]
-        for i in range(n0, n0 + nn):
-            for d in range(3):
-                pos[i, d] += hs * (vel[i, d] + acc[i - n0, d])
-        for e in range(e0, e0 + ne):
-            rotate_directors(Q, e, hs, omega[e, 0] + alpha[e - e0, 0], omega[e, 1] + alpha[e - e0, 1],
-                             omega[e, 2] + alpha[e - e0, 2])
+                    pos[i, d] += hs * (vel[i, d] + acc[noff[k] + i - n0, d])
+            for e in range(e0, e0 + ne):
+                g = eoff[k] + e - e0
+                rotate_directors(Q, e, hs, omega[e, 0] + alpha[g, 0], omega[e, 1] + alpha[g, 1],
+                                 omega[e, 2] + alpha[g, 2])
+            clamp_values(elapsed + hs, env.rod_pcon[r], env.rod_pcon[r + 1], env.rod_fcon[r],
+                         env.rod_fcon[r + 1], pos, Q, env, env.dloc[r])
+            if cols is not None:
+                collider_poses(r, elapsed + hs, cols, env.dloc[r])
+            if sources:
+                project_predictor(r, n0, nn, pos, planes, rd, cols, rd.sp_i, rd.sp_f,
+                                  fixed[boff[k]:boff[k + 1]])
         t_new = t + hs
-        clamp_values(elapsed + hs, c0, c1, f0, f1, pos, Q, env, dl)
-        if cols is not None:
-            collider_poses(r, elapsed + hs, cols, dl)
-        if sources:
-            project_predictor(r, n0, nn, pos, planes, rd, cols, rd.sp_i, rd.sp_f, fixed)
+        inv_hs = 1.0 / hs  # the per-node and per-element loops multiply
         set_rounds = 0
+        # Iteration at which the contact set last changed. Rods in contact with each other get
+        # a fresh budget after each release (a pile lets go one layer at a time); a rod alone
+        # against colliders does not: a step that needs more has outgrown the contact planes
+        # found at its start (a fast wrap round a cylinder) and is better halved.
+        round_start = 0
         # Near contacts Newton may take twice the iterations before the step is halved.
         budget = max_iter if not touching else 2 * max_iter
         step_scale = 1.0
@@ -426,44 +475,69 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
         converged = False
         failed = OK
         fail_at = -1
+        fail_rod = isl[0]
         it = 0
         update = math.inf  # so the second iteration reuses the first one's factor (chord)
         previous = math.inf
-        _implied_rates(n0, nn, e0, ne, inv_hs, pos, xn, Q, Qn, vel, omega)
+        for k in range(K):
+            n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+            _implied_rates(n0, nn, e0, ne, inv_hs, pos, xn, Q, Qn, vel, omega)
         active = 0
         factored_active = -1
         while it < budget:
             it += 1
-            rod_internal_loads(r, rd)
-            failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
-            if failed != OK:
-                break
-            if tau > 0.0:
+            for k in range(K):
+                r = isl[k]
+                n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
+                rod_internal_loads(r, rd)
+                failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
+                if failed != OK:
+                    fail_rod = r
+                    break
+                tau = rod_tau[r]
+                if tau > 0.0:
+                    for i in range(n0, n0 + nn):
+                        for d in range(3):
+                            force[i, d] += (tau / hs) * (force[i, d] - fn_el[i, d])
+                    for e in range(e0, e0 + ne):
+                        for d in range(3):
+                            torque[e, d] += (tau / hs) * (torque[e, d] - tn_el[e, d])
                 for i in range(n0, n0 + nn):
                     for d in range(3):
-                        force[i, d] += (tau / hs) * (force[i, d] - fn_el[i, d])
-                for e in range(e0, e0 + ne):
-                    for d in range(3):
-                        torque[e, d] += (tau / hs) * (torque[e, d] - tn_el[e, d])
-            for i in range(n0, n0 + nn):
-                for d in range(3):
-                    force[i, d] += mass[i] * gravity[d] + fext[i, d]
+                        force[i, d] += mass[i] * gravity[d] + fext[i, d]
+            if failed != OK:
+                break
+            active = 0
             if any_contact:
-                active = _rod_contacts(r, ext, hs, rd, planes, cols, pairs, n_pairs, rr, False)
-            # Residual (negated): forces minus inertia and damping.
-            for i in range(nn):
-                g = n0 + i
-                for d in range(3):
-                    rhs[2 * i, d] = force[g, d] - mass[g] * ((vel[g, d] - vn[g, d]) * inv_hs + nu * vel[g, d])
-            for k in range(ne):
-                e = e0 + k
-                inv_dil = 1.0 / dil[e]
-                for d in range(3):
-                    rhs[2 * k + 1, d] = (torque[e, d] + text[e, d] - J[e, d] * inv_dil * (
-                        (omega[e, d] - wn[e, d]) * inv_hs + nu * omega[e, d]))
-            if clamped:  # what the clamps hold is the residual of their rows
-                _clamp_reactions(r, elapsed + hs, n0, e0, c0, c1, f0, f1, pos, Q, rhs, env, dl)
-            for q in range(nb):
+                for k in range(K):
+                    active += _rod_contacts(isl[k], _extent(rd, isl[k]), hs, rd, planes, cols,
+                                            False)
+                if m > 0:  # after every rod's own contacts: they clear contact_force
+                    active += 1000003 * pair_plane_forces(plist, m, pairs, rd, pos, vel, hs,
+                                                          min(hs, 1e-4), rr, pp, ps)
+            for k in range(K):
+                r = isl[k]
+                n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
+                nu = rod_nu[r]
+                bo = boff[k]
+                # Residual (negated): forces minus inertia and damping.
+                for i in range(nn):
+                    g = n0 + i
+                    for d in range(3):
+                        rhs[bo + 2 * i, d] = force[g, d] - mass[g] * (
+                            (vel[g, d] - vn[g, d]) * inv_hs + nu * vel[g, d])
+                for j in range(ne):
+                    e = e0 + j
+                    inv_dil = 1.0 / dil[e]
+                    for d in range(3):
+                        rhs[bo + 2 * j + 1, d] = (torque[e, d] + text[e, d] - J[e, d] * inv_dil * (
+                            (omega[e, d] - wn[e, d]) * inv_hs + nu * omega[e, d]))
+                c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
+                f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
+                if c1 > c0 or f1 > f0:  # what the clamps hold is the residual of their rows
+                    _clamp_reactions(r, elapsed + hs, n0, e0, c0, c1, f0, f1, pos, Q,
+                                     rhs[bo:boff[k + 1]], env, env.dloc[r])
+            for q in range(nbt):
                 if fixed[q]:
                     rhs[q, 0] = 0.0
                     rhs[q, 1] = 0.0
@@ -476,129 +550,186 @@ def advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols, dl, pairs, n_p
             refactor = it == 1 or update > CHORD_RATE * previous or active != factored_active
             factored_active = active if refactor else factored_active
             previous = update
-            for geometric in (True, False):
+            for k in range(K):
+                prev_upd[k] = upd[k]
+            for k in range(K):
                 if not refactor:
                     break
-                _assemble(hs, ext, rd, nu, kv, geometric, A)
-                if any_contact:
-                    _add_element_stiffness(A, e0, ne, nn, el_K)
-                for q in range(nb):
-                    if fixed[q]:  # prescribed unknowns: identity row and column
-                        for d in range(1, BLOCK_BAND + 1):
-                            A[q, d] = 0.0
-                            if q + d < nb:
-                                A[q + d, d] = 0.0
-                        A[q, 0] = 0.0
-                        for d in range(3):
-                            A[q, 0, d, d] = 1.0
-                bad = block_cholesky(A, nb)
-                if bad == 0:
+                r = isl[k]
+                ext = _extent(rd, r)
+                n0, e0, v0, ne, nn, nv, closed = ext
+                bo, nb = boff[k], boff[k + 1] - boff[k]
+                Ak = A[bo:bo + nb]
+                for geometric in (True, False):
+                    _assemble(hs, ext, rd, rod_nu[r], 1.0 + rod_tau[r] / hs, geometric, Ak)
+                    if any_contact:
+                        _add_element_stiffness(Ak, e0, ne, nn, el_K)
+                    for q in range(nb):
+                        if fixed[bo + q]:  # prescribed unknowns: identity row and column
+                            for d in range(1, BLOCK_BAND + 1):
+                                Ak[q, d] = 0.0
+                                if q + d < nb:
+                                    Ak[q + d, d] = 0.0
+                            Ak[q, 0] = 0.0
+                            for d in range(3):
+                                Ak[q, 0, d, d] = 1.0
+                    bad = block_cholesky(Ak, nb)
+                    if bad == 0:
+                        break
+                if bad != 0:
+                    fail_rod = r
                     break
             if bad != 0:
                 failed = NOT_CONVERGED
                 fail_at = (bad - 1) // 2
                 break
-            block_solve(A, nb, rhs)
+            if refactor and m > 0:
+                n_act = lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A,
+                                       fixed, act, cdir, ck, Z, S)
+            for k in range(K):
+                bo, nb = boff[k], boff[k + 1] - boff[k]
+                block_solve(A[bo:bo + nb], nb, rhs[bo:bo + nb])
+            if n_act > 0:
+                lowrank_apply(n_act, act, cdir, pairs, rd, pp, node_block, fixed, Z, S, u, rhs)
+            # Update size relative to each rod's element length; the island's is the largest.
             update = 0.0
-            for i in range(nn):
-                for d in range(3):
-                    update = max(update, abs(rhs[2 * i, d]))
-            for k in range(ne):
-                b = 2 * k + 1
-                update = max(update, length_scale * (abs(rhs[b, 0]) + abs(rhs[b, 1]) + abs(rhs[b, 2])))
+            for k in range(K):
+                bo, nb = boff[k], boff[k + 1] - boff[k]
+                worst = 0.0
+                for q in range(0, nb, 2):
+                    for d in range(3):
+                        worst = max(worst, abs(rhs[bo + q, d]))
+                worst_phi = 0.0
+                for q in range(1, nb, 2):
+                    worst_phi = max(worst_phi, abs(rhs[bo + q, 0]) + abs(rhs[bo + q, 1])
+                                    + abs(rhs[bo + q, 2]))
+                upd[k] = max(worst / scale[k], worst_phi)
+                update = max(update, upd[k])
             # Damped Newton: when the update stops shrinking the iterate is overshooting
             # (a locally non-convex problem, e.g. a compressed soft rod), so take a shorter step.
             step_scale = step_scale * 0.5 if update >= last_update else 1.0
             last_update = update
             if _DEBUG:
-                print(t, hs, it, update / length_scale, step_scale, active % 65537, active // 65537)
+                print(t, hs, it, update, step_scale, active % 1000003, active // 1000003)
             update *= step_scale
             # Apply the update: positions add, frames rotate by the material rotation vector;
             # and the implied rates of the new iterate (as _implied_rates), while it is at hand.
-            for i in range(nn):
-                g = n0 + i
-                for d in range(3):
-                    pos[g, d] += step_scale * rhs[2 * i, d]
-                    vel[g, d] = (pos[g, d] - xn[g, d]) * inv_hs
-            for k in range(ne):
-                b = 2 * k + 1
-                e = e0 + k
-                rotate_directors(Q, e, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
-                w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
-                omega[e, 0] = w0 * inv_hs
-                omega[e, 1] = w1 * inv_hs
-                omega[e, 2] = w2 * inv_hs
+            for k in range(K):
+                upd[k] *= step_scale
+                n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+                bo = boff[k]
+                for i in range(nn):
+                    g = n0 + i
+                    for d in range(3):
+                        pos[g, d] += step_scale * rhs[bo + 2 * i, d]
+                        vel[g, d] = (pos[g, d] - xn[g, d]) * inv_hs
+                for j in range(ne):
+                    b = bo + 2 * j + 1
+                    e = e0 + j
+                    rotate_directors(Q, e, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
+                    w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
+                    omega[e, 0] = w0 * inv_hs
+                    omega[e, 1] = w1 * inv_hs
+                    omega[e, 2] = w2 * inv_hs
             # Convergence: what is left after this update is about rate * update, with the
             # contraction rate measured on this and earlier steps (CVODE's test), so smooth
-            # steps can stop after one iteration. Not for a rod near a contact, whose force
-            # switches on within the step.
-            if it >= 2 and previous > 0.0 and previous < math.inf:
-                rate[r] = max(0.3 * rate[r], update / previous)
-            early = (it == 1 and not touching and update <= EARLY_LIMIT * tol * length_scale
-                     and rate[r] * update <= tol * length_scale)
+            # steps can stop after one iteration. Not near a contact, whose force switches on
+            # within the step.
+            early = it == 1 and not touching
+            for k in range(K):
+                r = isl[k]
+                if it >= 2 and prev_upd[k] > 0.0 and previous > 0.0 and previous < math.inf:
+                    rate[r] = max(0.3 * rate[r], upd[k] / prev_upd[k])
+                early = early and upd[k] <= EARLY_LIMIT * tol and rate[r] * upd[k] <= tol
             if (it == budget and update <= EXTEND_RATE * previous and previous < math.inf
-                    and it < EXTEND * max_iter):
+                    and it < (round_start if m > 0 else 0) + EXTEND * max_iter):
                 budget += 1  # still contracting: a few more iterations cost less than halving
-            done_iterating = early or update <= tol * length_scale or it == budget
+            done_iterating = early or update <= tol or it == budget
             if done_iterating:
-                if sources and set_rounds < MAX_SET_ROUNDS and release_pulling(
-                        n0, nn, e0, ne, pos.shape[0], rd.sp_i, rd.sp_f) > 0:
+                released = 0
+                if set_rounds < MAX_SET_ROUNDS and sources:
+                    for k in range(K):
+                        n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+                        released += release_pulling(n0, nn, e0, ne, pos.shape[0], rd.sp_i,
+                                                    rd.sp_f)
+                if set_rounds < MAX_PAIR_ROUNDS and m > 0:
+                    released += release_pulling_pairs(plist, m, pp, ps)
+                if released > 0:
                     # Contacts that pull were released: solve again without them.
                     set_rounds += 1
-                    budget = it + max_iter
+                    budget = it + (2 * max_iter if m > 0 else max_iter)
+                    round_start = it
                     previous = 0.0  # forces a fresh factorisation
                     continue
-                converged = early or update <= tol * length_scale
+                converged = early or update <= tol
                 break
-        if failed == OK and not converged and update > ACCEPT * length_scale:
+        if failed == OK and not converged and update > ACCEPT:
             failed = NOT_CONVERGED
             fail_at = 0
         if failed != OK:
             # Roll back and retry the step in halves; give up only at a tiny fraction of dt.
-            for i in range(n0, n0 + nn):
-                for d in range(3):
-                    pos[i, d] = xn[i, d]
-                    vel[i, d] = vn[i, d]
-            for e in range(e0, e0 + ne):
-                for a in range(3):
-                    omega[e, a] = wn[e, a]
-                    for b in range(3):
-                        Q[e, a, b] = Qn[e, a, b]
-            last_hs = 0.0
+            for k in range(K):
+                n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+                for i in range(n0, n0 + nn):
+                    for d in range(3):
+                        pos[i, d] = xn[i, d]
+                        vel[i, d] = vn[i, d]
+                for e in range(e0, e0 + ne):
+                    for a in range(3):
+                        omega[e, a] = wn[e, a]
+                        for b in range(3):
+                            Q[e, a, b] = Qn[e, a, b]
+                last_hs[k] = 0.0
             if hs > h / MAX_REFINE:
                 hs *= 0.5
-                stats[r, 4] += 1
+                stats[isl[0], 4] += 1
                 continue
-            status[r, 0] = failed
-            status[r, 1] = max(fail_at, 0)
-            status[r, 2] = done
+            for k in range(K):
+                status[isl[k], 2] = done
+            status[fail_rod, 0] = failed
+            status[fail_rod, 1] = max(fail_at, 0)
             return t
         # Accepted (velocities are the last iterate's): friction anchors and clamp rates.
-        if any_contact:
-            _rod_contacts(r, ext, hs, rd, planes, cols, pairs, n_pairs, rr, True)
-        if cols is not None:
-            collider_impulses(r, hs, cols, env)
-        clamp_rates(elapsed + hs, c0, c1, f0, f1, pos, vel, Q, omega, env, dl)
-        if clamped:
-            add_impulse(r, hs, c0, c1, f0, f1, env)
+        for k in range(K):
+            r = isl[k]
+            ext = _extent(rd, r)
+            n0, e0, v0, ne, nn, nv, closed = ext
+            c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
+            f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
+            if any_contact:
+                _rod_contacts(r, ext, hs, rd, planes, cols, True)
+            if cols is not None:
+                collider_impulses(r, hs, cols, env)
+            clamp_rates(elapsed + hs, c0, c1, f0, f1, pos, vel, Q, omega, env, env.dloc[r])
+            if c1 > c0 or f1 > f0:
+                add_impulse(r, hs, c0, c1, f0, f1, env)
+            if m > 0:
+                for e in range(e0, e0 + ne):
+                    pair_off[e] = -1.0
+            last_hs[k] = hs
+            stats[r, 1] += it
+            if not converged:
+                stats[r, 2] += 1
+            stats[r, 3] = upd[k]
+        if m > 0:  # the pairs' share of contact_force, cleared above; their offsets carry over
+            pair_plane_forces(plist, m, pairs, rd, pos, vel, hs, min(hs, 1e-4), rr, pp, ps)
+            commit_pairs(plist, m, pairs, rd, pp)
         t = t_new
-        last_hs = hs
-        stats[r, 1] += it
-        if not converged:
-            stats[r, 2] += 1
-        stats[r, 3] = update / length_scale
         elapsed += hs
         if elapsed >= h * (1.0 - 1e-9):
             done += 1
-            step_rod_drivers(dl, dt, r, env, cols, True)
+            for k in range(K):
+                r = isl[k]
+                step_rod_drivers(env.dloc[r], dt, r, env, cols, True)
+                stats[r, 0] += 1
+                if hs != h:
+                    last_hs[k] = 0.0
             fresh_step = True
-            stats[r, 0] += 1
             elapsed = 0.0
-            if hs != h:
-                last_hs = 0.0
             hs = h
-    status[r, 2] = n_steps
-    h_prev[r] = last_hs
+    for k in range(K):
+        status[isl[k], 2] = n_steps
+        h_prev[isl[k]] = last_hs[k]
     return t
 
 
@@ -619,13 +750,15 @@ def _clamp_reactions(r, tau, n0, e0, c0, c1, f0, f1, pos, Q, rhs, env, dl) -> No
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, rd, env, cols, drv,
-                          load, pairs, n_pairs):
-    """Advance rods ``r_begin .. r_end - 1``, each with its own copy of the drivers (loaded
-    from ``drv`` first when ``load``); releases the GIL so threads can share rods."""
+def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, rd, env, cols, drv, load):
+    """Advance rods ``r_begin .. r_end - 1`` (none touching another), each alone and with its
+    own copy of the drivers (loaded from ``drv`` first when ``load``); releases the GIL so
+    threads can share rods."""
+    isl = np.empty(1, dtype=np.int64)
+    pc = (np.empty((0, 2), dtype=np.int64), np.empty(0, dtype=np.int64),
+          np.empty((0, PP_COLS)), np.empty((0, PS_COLS), dtype=np.int64))
     for r in range(r_begin, r_end):
-        dl = env.dloc[r]
         if load:
-            copy_drivers(dl, drv)
-        rd.r1[R_TIMES][r] = advance_rod_implicit(r, n_steps, t, sim, opts, rd, env, cols,
-                                           dl, pairs, n_pairs)
+            copy_drivers(env.dloc[r], drv)
+        isl[0] = r
+        rd.r1[R_TIMES][r] = advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc)

@@ -66,7 +66,7 @@ def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
     advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, opts, rd, env,
-                          cols, drv, opts[OPT_LOAD] != 0, pairs, 0)
+                          cols, drv, opts[OPT_LOAD] != 0)
     return rd.r1[R_TIMES][opts[OPT_R0]], _finish(n_steps, opts, rd, env, cols, drv), pairs
 
 

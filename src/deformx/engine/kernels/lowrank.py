@@ -1,0 +1,126 @@
+"""Newton systems of rods coupled by rod-rod contacts: banded factors plus a low-rank term.
+
+Rods that touch are solved together (``advance_island_implicit``). Their Newton matrix is the
+block diagonal ``D`` of the rods' own banded matrices plus rank-one terms per active contact,
+``k_c g_c g_c^T``: along the normal (``g_c`` the gradient of the penetration, nonzero at the four
+nodes of its two segments, which may sit far apart on one rod or on two rods) and, with
+friction, along two tangents (its stiffness along and across the slip). By the Woodbury identity
+
+    (D + G K G^T)^-1 b = y - Z (K^-1 + G^T Z)^-1 G^T y,    y = D^-1 b,   Z = D^-1 G,
+
+the coupled system costs one banded solve per column and rod it touches (``Z``, kept while
+the factors are reused) and a dense solve of the columns' matrix: exact, so two rods in
+contact agree on where the other one ends the step however stiff the contact is.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from ..contact.pairplanes import PP_KA, PP_KB, PP_KN, PP_N, PP_S, PP_SH, PP_T
+from .banded import block_solve
+from .bundles import E_SEG_A, E_SEG_B
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _corners(p, pairs, seg_a, seg_b, pp):
+    """The contact's four nodes and their weights in the relative displacement of its points."""
+    i, j = pairs[p, 0], pairs[p, 1]
+    s, t = pp[p, PP_S], pp[p, PP_T]
+    return (seg_a[i], seg_b[i], seg_a[j], seg_b[j]), (1.0 - s, s, t - 1.0, -t)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _dot_column(nodes, w, c, cdir, node_block, fixed, y):
+    """Column c of G (weights ``w`` at ``nodes`` along ``cdir[c]``) dotted with ``y``."""
+    v = 0.0
+    for k in range(4):
+        blk = node_block[nodes[k]]
+        if not fixed[blk]:
+            v += w[k] * (cdir[c, 0] * y[blk, 0] + cdir[c, 1] * y[blk, 1] + cdir[c, 2] * y[blk, 2])
+    return v
+
+
+@njit(cache=True, error_model="numpy")
+def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed, act, cdir,
+                   ck, Z, S):
+    """The active contacts' columns (per pair its normal and, with friction, two tangents:
+    pair ``act[c]``, direction ``cdir[c]``, stiffness ``ck[c]``; returns their count), ``Z =
+    D^-1 G`` and the Cholesky factor of ``K^-1 + G^T Z`` into ``S``. ``node_block`` maps a node
+    to its block in the island's system, ``node_rod`` to its rod's slot; ``boff`` the rods'
+    block offsets."""
+    seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
+    nc = 0
+    for q in range(m):
+        p = plist[q]
+        if pp[p, PP_KN] <= 0.0:
+            continue
+        n = (pp[p, PP_N], pp[p, PP_N + 1], pp[p, PP_N + 2])
+        a = (pp[p, PP_SH], pp[p, PP_SH + 1], pp[p, PP_SH + 2])
+        b = (n[1] * a[2] - n[2] * a[1], n[2] * a[0] - n[0] * a[2], n[0] * a[1] - n[1] * a[0])
+        for dirn, k in ((n, pp[p, PP_KN]), (a, pp[p, PP_KA]), (b, pp[p, PP_KB])):
+            if k > 0.0:
+                act[nc] = p
+                cdir[nc, 0], cdir[nc, 1], cdir[nc, 2] = dirn
+                ck[nc] = k
+                nc += 1
+    nbt = Z.shape[1]
+    for c in range(nc):
+        p = act[c]
+        for b in range(nbt):
+            Z[c, b, 0] = 0.0
+            Z[c, b, 1] = 0.0
+            Z[c, b, 2] = 0.0
+        nodes, w = _corners(p, pairs, seg_a, seg_b, pp)
+        for k in range(4):
+            blk = node_block[nodes[k]]
+            if not fixed[blk]:
+                for d in range(3):
+                    Z[c, blk, d] += w[k] * cdir[c, d]
+        ka = node_rod[nodes[0]]
+        kb = node_rod[nodes[2]]
+        block_solve(A[boff[ka]:boff[ka + 1]], boff[ka + 1] - boff[ka], Z[c, boff[ka]:boff[ka + 1]])
+        if kb != ka:
+            block_solve(A[boff[kb]:boff[kb + 1]], boff[kb + 1] - boff[kb],
+                        Z[c, boff[kb]:boff[kb + 1]])
+    for c in range(nc):  # S = K^-1 + G^T Z (lower triangle), then its Cholesky factor
+        nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
+        for e in range(c + 1):
+            S[c, e] = _dot_column(nodes, w, c, cdir, node_block, fixed, Z[e])
+        S[c, c] += 1.0 / ck[c]
+    for c in range(nc):
+        for e in range(c + 1):
+            v = S[c, e]
+            for k in range(e):
+                v -= S[c, k] * S[e, k]
+            if c == e:
+                S[c, c] = math.sqrt(max(v, 1e-300))
+            else:
+                S[c, e] = v / S[e, e]
+    return nc
+
+
+@njit(cache=True, error_model="numpy")
+def lowrank_apply(nc, act, cdir, pairs, rd, pp, node_block, fixed, Z, S, u, y) -> None:
+    """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y``."""
+    seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
+    for c in range(nc):
+        nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
+        v = _dot_column(nodes, w, c, cdir, node_block, fixed, y)
+        for e in range(c):
+            v -= S[c, e] * u[e]
+        u[c] = v / S[c, c]
+    for c in range(nc - 1, -1, -1):
+        v = u[c]
+        for e in range(c + 1, nc):
+            v -= S[e, c] * u[e]
+        u[c] = v / S[c, c]
+    nbt = y.shape[0]
+    for c in range(nc):
+        uc = u[c]
+        for b in range(nbt):
+            y[b, 0] -= uc * Z[c, b, 0]
+            y[b, 1] -= uc * Z[c, b, 1]
+            y[b, 2] -= uc * Z[c, b, 2]
