@@ -343,7 +343,7 @@ class World:
                       None if cp is None else cp.I)
         self._kernel = step.KERNELS[self.integrator, coupled]
         # Deepest start penetration per rod beyond what a step resolves (stable integrator).
-        self._deep = self._rods_p["stats"][:, 5] if self.integrator == "stable" else None
+        self._deep = self._rods_p["stats"][:, 5]
         self._stale_env = False
 
     # ------------------------------------------------------------------ stepping

@@ -16,8 +16,19 @@ from numba import njit
 
 # Plane table columns: point (3), unit normal (3), stiffness, damping, mu_s, mu_k, automatic.
 PL_P, PL_N, PL_K, PL_C, PL_MUS, PL_MUK, PL_AUTO = 0, 3, 6, 7, 8, 9, 10
+V_OUT = 0.1  # m/s: the fastest a point starting inside a collider is pushed out
 # Sliding speed (m/s) below which the kinetic direction follows the applied load, not velocity.
 _SLIP_EPS = 1e-12
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def start_offset(carried, depth, speed, dt, v_out):
+    """Depth (m) a node's contact force leaves alone (explicit integrator): the offset carried
+    from the last step, or for a node not in contact then, what of ``depth`` one step's
+    approach at ``speed`` cannot explain (it was placed inside), less ``v_out dt``."""
+    if carried >= 0.0:
+        return carried
+    return max(depth - 2.0 * speed * dt - v_out * dt, 0.0)
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -38,12 +49,13 @@ def plane_penalty(planes, p, mass, k_floor, dt_ref):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def plane_contact_node(x0, x1, x2, v0, v1, v2, fo0, fo1, fo2, mass, radius, dt,
-                       p0, p1, p2, n0, n1, n2, stiffness, damping, mu_s, mu_k):
+                       p0, p1, p2, n0, n1, n2, stiffness, damping, mu_s, mu_k, off):
     """Contact force (N, lab) on one node and the normal stiffness (N/m; 0 if apart).
 
-    ``fo`` is the node's total non-contact force, used to predict sticking.
+    ``fo`` is the node's total non-contact force, used to predict sticking; ``off`` (m) the
+    depth the force leaves alone (a node placed inside, see ``carry_offsets``).
     """
-    gap = (x0 - p0) * n0 + (x1 - p1) * n1 + (x2 - p2) * n2 - radius
+    gap = (x0 - p0) * n0 + (x1 - p1) * n1 + (x2 - p2) * n2 - radius + off
     if gap >= 0.0:
         return 0.0, 0.0, 0.0, 0.0
     vn = v0 * n0 + v1 * n1 + v2 * n2

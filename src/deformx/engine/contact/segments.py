@@ -35,11 +35,13 @@ from numba import njit
 from ..geometry.bvh import closest_segment_search, nearest_k_search, signed_side
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from ..kernels.refcount import NO_REFCOUNT
+from .plane import V_OUT, start_offset
 from .primitives import segment_deepest, shape_sdf
 from ..kernels.bundles import (
     N_CONTACT_FORCE,
     N_FORCE,
     N_MASS,
+    N_PEN_OFF,
     N_NODE_KMIN,
     N_NODE_RADIUS,
 )
@@ -471,6 +473,7 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
     mass, node_radius, node_kmin = rd.n1[N_MASS], rd.n1[N_NODE_RADIUS], rd.n1[N_NODE_KMIN]
+    pen_off = rd.n1[N_PEN_OFF]
     el_K, force, contact_force = rd.el_K, rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE]
     kind, par, mesh_rng, allowed = cols.kind, cols.par, cols.rng, cols.allowed
     # Poses and velocities of the colliders as this rod sees them now (see drivers).
@@ -538,7 +541,10 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
             if not hit:
                 continue
             pen[i, c] = radius - sd
-            if pen[i, c] <= 0.0:
+            # Less what a node placed inside keeps (see kernels/verlet.py, _carry_offsets).
+            depth = pen[i, c] - start_offset(pen_off[i], pen[i, c], math.sqrt(
+                u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), h, V_OUT)
+            if depth <= 0.0:
                 continue
             use_anchor = not anchored and (anchor_col[i] == c or anchor_col[i] < 0)
             # Written out rather than one helper taking the arrays (see above); a new contact
@@ -549,7 +555,7 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
             kc, cc = collider_penalty(par, c, mass[i], node_kmin[i], dt_ref)
             w, rq = _relative_velocity(pose, twist, c, u, q)
             on, f, kt, A = _penalty_friction(kc, cc, par[c, P_MUS], par[c, P_MUK], h, p, w, n,
-                                             pen[i, c], A, use_anchor)
+                                             depth, A, use_anchor)
             if not on:
                 continue
             kn = kc + cc / h

@@ -45,7 +45,7 @@ from numba import njit
 from ..kernels.bundles import (
     N_CONTACT_FORCE, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS,
 )
-from .plane import PL_MUK, PL_MUS, plane_penalty
+from .plane import PL_MUK, PL_MUS, V_OUT, plane_penalty
 from .segments import (
     MESH, P_MUK, P_MUS, _add_reaction, _mesh_closest, _rotate, _shape_closest,
     _to_local, _to_world, collider_penalty,
@@ -62,7 +62,6 @@ INACTIVE, ACTIVE, RELEASED = 0, 1, 2
 # wire on the floor would otherwise rock from iterate to iterate), two for rod-rod pairs
 # (contacts activated by a predictor that overlaps the other rod let go at once).
 PLANE_FLIPS, PAIR_FLIPS = 0, 2
-V_OUT = 0.1  # m/s: the fastest a point starting inside a collider is pushed out
 # Friction saturates as mu N tanh(y), y = |trial force| / (mu N); a step that ends beyond
 # Y_SLIDE counts as sliding (kinetic coefficient next step) and drags its anchor up to Y_ANCHOR
 # behind the point (a spring loaded to 0.76 mu N: when the point stops it springs back by less

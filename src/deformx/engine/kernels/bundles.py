@@ -31,7 +31,8 @@ from numba.extending import overload
 # which keeps numba's compile time down (it grows with every array of every signature).
 # State rows come first in each stack: positions, velocities, frames, angular velocities;
 # the stable integrator's step start, predictor rates, viscous loads, contact planes and
-# friction anchors, rod-rod contact offsets, last step and contraction rate; the rod-rod
+# friction anchors, rod-rod contact offsets, the explicit integrator's start-inside offsets,
+# last step and contraction rate; the rod-rod
 # Verlet list's reference positions and (pairs, valid, builds, touching).
 ROD_ARRAYS = (
     ('n3', 'f', (11, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'ref', 'fext', 'force',
@@ -40,7 +41,7 @@ ROD_ARRAYS = (
                               'torque', 'stress'), 3),
     ('e33', 'f', (2, 'E', 3, 3), ('Q', 'Qn'), 2),
     ('v3', 'f', (6, 'V', 3), ('B', 'rest_kappa', 'kappa', 'couple', 'scr_C', 'scr_X'), 0),
-    ('n1', 'f', (3, 'N'), ('mass', 'node_radius', 'node_kmin'), 0),
+    ('n1', 'f', (4, 'N'), ('pen_off', 'mass', 'node_radius', 'node_kmin'), 1),
     ('e1', 'f', (5, 'E'), ('pair_off', 'rest_len', 'seg_radius', 'dil', 'scr_edot'), 1),
     ('v1', 'f', (1, 'V'), ('rest_vor',), 0),
     ('r1', 'f', (6, 'R'), ('h_prev', 'rate', 'decay', 'nu', 'tau', 'times'), 2),
@@ -63,7 +64,7 @@ ROD_ARRAYS = (
 E_OMEGA, E_WN, E_TN_EL, E_J, E_INV_J, E_S, E_REST_SIGMA, E_TEXT, E_TORQUE, E_STRESS = range(10)
 E_Q, E_QN = 0, 1
 V_B, V_REST_KAPPA, V_KAPPA, V_COUPLE, V_SCR_C, V_SCR_X = 0, 1, 2, 3, 4, 5
-N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2
+N_PEN_OFF, N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2, 3
 E_PAIR_OFF, E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3, 4
 V_REST_VOR = 0
 R_H_PREV, R_RATE, R_DECAY, R_NU, R_TAU, R_TIMES = 0, 1, 2, 3, 4, 5

@@ -390,6 +390,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     act = np.zeros(3 * m, dtype=np.int64)  # per pair a normal column, two with friction
     cdir = np.zeros((3 * m, 3))
     ck = np.zeros(3 * m)
+    csup = np.zeros((3 * m, 2), dtype=np.int64)
     u = np.zeros(3 * m)
     n_act = 0
 
@@ -585,12 +586,13 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
                 break
             if refactor and m > 0:
                 n_act = lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A,
-                                       fixed, act, cdir, ck, Z, S)
+                                       fixed, act, cdir, ck, csup, Z, S)
             for k in range(K):
                 bo, nb = boff[k], boff[k + 1] - boff[k]
                 block_solve(A[bo:bo + nb], nb, rhs[bo:bo + nb])
             if n_act > 0:
-                lowrank_apply(n_act, act, cdir, pairs, rd, pp, node_block, fixed, Z, S, u, rhs)
+                lowrank_apply(n_act, act, cdir, csup, pairs, rd, pp, node_block, node_rod, boff,
+                              fixed, Z, S, u, rhs)
             # Update size relative to each rod's element length; the island's is the largest.
             update = 0.0
             for k in range(K):

@@ -33,24 +33,27 @@ def _corners(p, pairs, seg_a, seg_b, pp):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _dot_column(nodes, w, c, cdir, node_block, fixed, y):
-    """Column c of G (weights ``w`` at ``nodes`` along ``cdir[c]``) dotted with ``y``."""
+def _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, y, ka, kb):
+    """Column c of G (weights ``w`` at ``nodes`` along ``cdir[c]``) dotted with ``y``, which is
+    zero outside the blocks of the rods in slots ``ka``, ``kb``."""
     v = 0.0
     for k in range(4):
         blk = node_block[nodes[k]]
-        if not fixed[blk]:
+        kr = node_rod[nodes[k]]
+        if not fixed[blk] and (kr == ka or kr == kb):
             v += w[k] * (cdir[c, 0] * y[blk, 0] + cdir[c, 1] * y[blk, 1] + cdir[c, 2] * y[blk, 2])
     return v
 
 
 @njit(cache=True, error_model="numpy")
 def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed, act, cdir,
-                   ck, Z, S):
+                   ck, csup, Z, S):
     """The active contacts' columns (per pair its normal and, with friction, two tangents:
     pair ``act[c]``, direction ``cdir[c]``, stiffness ``ck[c]``; returns their count), ``Z =
     D^-1 G`` and the Cholesky factor of ``K^-1 + G^T Z`` into ``S``. ``node_block`` maps a node
     to its block in the island's system, ``node_rod`` to its rod's slot; ``boff`` the rods'
-    block offsets."""
+    block offsets. ``Z[c]`` is only written (and read) on the blocks of the one or two rods of
+    its pair (slots ``csup[c]``)."""
     seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
     nc = 0
     for q in range(m):
@@ -66,21 +69,23 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
                 cdir[nc, 0], cdir[nc, 1], cdir[nc, 2] = dirn
                 ck[nc] = k
                 nc += 1
-    nbt = Z.shape[1]
     for c in range(nc):
         p = act[c]
-        for b in range(nbt):
-            Z[c, b, 0] = 0.0
-            Z[c, b, 1] = 0.0
-            Z[c, b, 2] = 0.0
         nodes, w = _corners(p, pairs, seg_a, seg_b, pp)
+        ka = node_rod[nodes[0]]
+        kb = node_rod[nodes[2]]
+        csup[c, 0] = ka
+        csup[c, 1] = kb
+        for kr in (ka, kb):
+            for b in range(boff[kr], boff[kr + 1]):
+                Z[c, b, 0] = 0.0
+                Z[c, b, 1] = 0.0
+                Z[c, b, 2] = 0.0
         for k in range(4):
             blk = node_block[nodes[k]]
             if not fixed[blk]:
                 for d in range(3):
                     Z[c, blk, d] += w[k] * cdir[c, d]
-        ka = node_rod[nodes[0]]
-        kb = node_rod[nodes[2]]
         block_solve(A[boff[ka]:boff[ka + 1]], boff[ka + 1] - boff[ka], Z[c, boff[ka]:boff[ka + 1]])
         if kb != ka:
             block_solve(A[boff[kb]:boff[kb + 1]], boff[kb + 1] - boff[kb],
@@ -88,7 +93,8 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
     for c in range(nc):  # S = K^-1 + G^T Z (lower triangle), then its Cholesky factor
         nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
         for e in range(c + 1):
-            S[c, e] = _dot_column(nodes, w, c, cdir, node_block, fixed, Z[e])
+            S[c, e] = _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, Z[e],
+                                  csup[e, 0], csup[e, 1])
         S[c, c] += 1.0 / ck[c]
     for c in range(nc):
         for e in range(c + 1):
@@ -103,12 +109,14 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
 
 
 @njit(cache=True, error_model="numpy")
-def lowrank_apply(nc, act, cdir, pairs, rd, pp, node_block, fixed, Z, S, u, y) -> None:
+def lowrank_apply(nc, act, cdir, csup, pairs, rd, pp, node_block, node_rod, boff, fixed, Z, S,
+                  u, y) -> None:
     """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y``."""
     seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
     for c in range(nc):
         nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
-        v = _dot_column(nodes, w, c, cdir, node_block, fixed, y)
+        v = _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, y, node_rod[nodes[0]],
+                        node_rod[nodes[2]])
         for e in range(c):
             v -= S[c, e] * u[e]
         u[c] = v / S[c, c]
@@ -117,10 +125,11 @@ def lowrank_apply(nc, act, cdir, pairs, rd, pp, node_block, fixed, Z, S, u, y) -
         for e in range(c + 1, nc):
             v -= S[e, c] * u[e]
         u[c] = v / S[c, c]
-    nbt = y.shape[0]
     for c in range(nc):
         uc = u[c]
-        for b in range(nbt):
-            y[b, 0] -= uc * Z[c, b, 0]
-            y[b, 1] -= uc * Z[c, b, 1]
-            y[b, 2] -= uc * Z[c, b, 2]
+        for j in range(1 if csup[c, 0] == csup[c, 1] else 2):  # a self-contact: one rod
+            kr = csup[c, j]
+            for b in range(boff[kr], boff[kr + 1]):
+                y[b, 0] -= uc * Z[c, b, 0]
+                y[b, 1] -= uc * Z[c, b, 1]
+                y[b, 2] -= uc * Z[c, b, 2]

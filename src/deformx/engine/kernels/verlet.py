@@ -11,13 +11,16 @@ With rod-rod contact, :mod:`.coupled` calls ``advance_rod`` one step at a time f
 
 from __future__ import annotations
 
+import math
+
 from numba import njit
 
-from ..contact.plane import plane_contact_node, plane_penalty
+from ..contact.plane import V_OUT, plane_contact_node, plane_penalty, start_offset
 from ..contact.segments import rod_collider_contacts
 from .bundles import (
     D_W, E_DIL, E_INV_J, E_J, E_OMEGA, E_Q, E_TEXT, E_TORQUE, N_CONTACT_FORCE, N_EXTRA, N_FEXT,
-    N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS, N_POS, N_VEL, R_CLOSED, R_DECAY, R_ELEM0,
+    N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS, N_PEN_OFF, N_POS, N_VEL, R_CLOSED, R_DECAY,
+    R_ELEM0,
     R_NE, R_NODE0, R_TIMES, R_VOR0, SIM_DT, SIM_G, SIM_MAX_STRAIN, V_KAPPA, V_REST_VOR,
 )
 from .cosserat import rod_extent, rod_internal_loads
@@ -131,12 +134,14 @@ def advance_rod(r, n_steps, t, sim, rd, env, cols, dl, use_extra, start_mid,
                     contact_force[i, j] = 0.0
             if n_planes > 0:
                 _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt,
-                                contact_force)
+                                contact_force, rd.n1[N_PEN_OFF])
             if cols is not None:
                 collider_poses(r, h, cols, dl)
                 rod_collider_contacts(r, n0, nn, e0, ne, dt, dt, pos, vel, pos, rd, cols,
                                       True, False)
                 collider_impulses(r, dt, cols, env)
+            _carry_offsets(r, n0, nn, planes, pos, vel, node_radius, rd.n1[N_PEN_OFF], dt, cols,
+                           rd.stats)
             if use_extra:
                 extra = rd.n3[N_EXTRA]
                 for i in range(n0, n0 + nn):
@@ -221,21 +226,55 @@ def _frame_load(Q, e, j, dl, d, omega, J, torque, dil, inv_dt) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt, contact_force):
+def _carry_offsets(r, n0, nn, planes, pos, vel, node_radius, pen_off, dt, cols, stats) -> None:
+    """Per node, the depth its contact forces leave alone next step: a node found deeper in a
+    plane or collider than one step's approach explains (placed inside) keeps that depth,
+    less ``V_OUT dt`` per step, so it is pushed out at ``V_OUT`` instead of being launched;
+    an impact gets none. -1: not in contact. ``stats[r, 5]``: the deepest such start (m)
+    beyond 20 % of the radius, for the world's warning."""
+    for i in range(n0, n0 + nn):
+        radius = node_radius[i]
+        depth = -1e30
+        for p in range(planes.shape[0]):
+            depth = max(depth, radius - ((pos[i, 0] - planes[p, 0]) * planes[p, 3]
+                                         + (pos[i, 1] - planes[p, 1]) * planes[p, 4]
+                                         + (pos[i, 2] - planes[p, 2]) * planes[p, 5]))
+        if cols is not None:
+            for c in range(cols.kind.shape[0]):
+                depth = max(depth, cols.pen[i, c])
+        if depth <= 0.0:
+            pen_off[i] = -1.0
+        elif pen_off[i] < 0.0:
+            speed = math.sqrt(vel[i, 0] ** 2 + vel[i, 1] ** 2 + vel[i, 2] ** 2)
+            pen_off[i] = start_offset(-1.0, depth, speed, dt, V_OUT)
+            if pen_off[i] > 0.0 and depth > 0.2 * radius:
+                stats[r, 5] = max(stats[r, 5], depth)
+        else:
+            pen_off[i] = max(min(pen_off[i], depth) - V_OUT * dt, 0.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt,
+                    contact_force, pen_off):
     """Add plane contact forces to the rod's nodes (also added to ``contact_force``).
 
     ``planes`` rows: point(3), normal(3), stiffness, damping, mu_s, mu_k, auto flag; an
     automatic penalty uses each node's mass (contact frequency 0.2/dt, critically damped), but
-    at least ``node_kmin`` (0.1 % of the elements' axial stiffness EA / dl).
+    at least ``node_kmin`` (0.1 % of the elements' axial stiffness EA / dl); ``pen_off`` the
+    depth each node's force leaves alone (see ``_carry_offsets``).
     """
     for i in range(n0, n0 + nn):
+        speed = math.sqrt(vel[i, 0] ** 2 + vel[i, 1] ** 2 + vel[i, 2] ** 2)
         for p in range(planes.shape[0]):
             k, c = plane_penalty(planes, p, mass[i], node_kmin[i], dt)
             f0, f1, f2, _ = plane_contact_node(
                 pos[i, 0], pos[i, 1], pos[i, 2], vel[i, 0], vel[i, 1], vel[i, 2],
                 force[i, 0], force[i, 1], force[i, 2], mass[i], node_radius[i], dt,
                 planes[p, 0], planes[p, 1], planes[p, 2], planes[p, 3], planes[p, 4], planes[p, 5],
-                k, c, planes[p, 8], planes[p, 9])
+                k, c, planes[p, 8], planes[p, 9],
+                start_offset(pen_off[i], node_radius[i] - (
+                    (pos[i, 0] - planes[p, 0]) * planes[p, 3] + (pos[i, 1] - planes[p, 1])
+                    * planes[p, 4] + (pos[i, 2] - planes[p, 2]) * planes[p, 5]), speed, dt, V_OUT))
             force[i, 0] += f0
             force[i, 1] += f1
             force[i, 2] += f2
