@@ -52,7 +52,7 @@ ROD_ARRAYS = (
     ('ri', 'i', (6, 'R'), ('node0', 'elem0', 'vor0', 'ne', 'closed', 'group'), 0),
     ('pair_state', 'i', (4,), None, 1),
     ('stats', 'f', ('R', 6), None, 0),
-    ('sp_f', 'f', ('Q', 2, 15), None, 1),
+    ('sp_f', 'f', ('Q', 2, 16), None, 1),
     ('el_K', 'f', ('E', 3, 3, 3), None, 0),
     ('status', 'i', ('R', 3), None, 0),
     ('segs', 'i', ('S',), None, 0),

@@ -31,8 +31,8 @@ from numba import njit
 
 from ..contact.pairplanes import (PP_COLS, PS_COLS, commit_pairs, pair_plane, pair_plane_forces,
                                   release_pulling_pairs)
-from ..contact.speculative import (SP_K, gather_planes, plane_forces, project_predictor,
-                                   release_pulling, start_penetrations)
+from ..contact.speculative import (SP_K, freeze_friction_bounds, gather_planes, plane_forces,
+                                   project_predictor, release_pulling, start_penetrations)
 from .banded import BLOCK_BAND, add_lower, block_cholesky, block_solve, store_block
 from .lowrank import lowrank_apply, lowrank_factor
 from .cosserat import rod_extent, rod_internal_loads
@@ -463,6 +463,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
         t_new = t + hs
         inv_hs = 1.0 / hs  # the per-node and per-element loops multiply
         set_rounds = 0
+        frozen = False  # friction bounds fixed for the rest of the step
         # Iteration at which the contact set last changed. Rods in contact with each other get
         # a fresh budget after each release (a pile lets go one layer at a time); a rod alone
         # against colliders does not: a step that needs more has outgrown the contact planes
@@ -491,7 +492,10 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
                 r = isl[k]
                 n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
                 rod_internal_loads(r, rd)
-                failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain)
+                # The predictor may overstretch an element next to a clamp that starts moving
+                # (x + h v everywhere else): only Newton's iterates count as runaway strain.
+                failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque,
+                                         max_strain if it > 1 else math.inf)
                 if failed != OK:
                     fail_rod = r
                     break
@@ -646,6 +650,19 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
             if (it == budget and update <= EXTEND_RATE * previous and previous < math.inf
                     and it < (round_start if m > 0 else 0) + EXTEND * max_iter):
                 budget += 1  # still contracting: a few more iterations cost less than halving
+            if it == budget and update > tol and not early and not frozen and sources:
+                # About to give up: fix the contacts' friction bounds and go on.
+                frozen = True
+                count = 0
+                for k in range(K):
+                    n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+                    count += freeze_friction_bounds(n0, nn, e0, ne, pos.shape[0], rd.sp_i,
+                                                    rd.sp_f)
+                if count > 0:
+                    budget = it + 2 * max_iter
+                    round_start = it
+                    previous = 0.0  # forces a fresh factorisation
+                    continue
             done_iterating = early or update <= tol or it == budget
             if done_iterating:
                 released = 0
