@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_bvp
+from scipy.integrate import solve_bvp, trapezoid
 
 from tests.reference.rod_statics import (
     ALPHA_C,
@@ -39,7 +39,7 @@ def _inextensible_elastica_tip(load: float, end_force_z: float = 0.0) -> np.ndar
     sol = solve_bvp(fun, bc, s, np.zeros((2, s.size)), tol=1e-10, max_nodes=100_000)
     assert sol.status == 0
     theta = sol.sol(s)[0]
-    return np.array([np.trapezoid(np.cos(theta), s), np.trapezoid(np.sin(theta), s)])
+    return np.array([trapezoid(np.cos(theta), s), trapezoid(np.sin(theta), s)])
 
 
 def test_stiff_rod_sag_matches_euler_bernoulli():
