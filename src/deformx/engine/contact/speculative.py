@@ -569,9 +569,10 @@ def release_pulling(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
 
 
 @njit(cache=True, error_model="numpy")
-def freeze_friction_bounds(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
-    """Fix the friction bound (mu N) of each acting plane at its normal force at the iterate,
-    for the rest of the step; returns how many.
+def freeze_friction_bounds(n0, nn, e0, ne, n_nodes, n_planes, sp_i, sp_f) -> int:
+    """Fix the friction bound (mu N) of each acting collider plane at its normal force at the
+    iterate, for the rest of the step; returns how many. World planes keep theirs: a rope
+    cannot wrap a flat plane, and their friction is solved as before.
 
     Newton stalls where friction at an edge feeds back on the normal force through the rod's
     tension (a rope dragged over a kerb or round a post: a capstan), a coupling that the
@@ -586,7 +587,7 @@ def freeze_friction_bounds(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
     for k in range(nn + ne):
         slot = n0 + k if k < nn else n_nodes + e0 + k - nn
         for j in range(SP_K):
-            if (sp_i[slot, j, SP_SRC] >= 0 and sp_i[slot, j, SP_SET] == ACTIVE
+            if (sp_i[slot, j, SP_SRC] >= n_planes and sp_i[slot, j, SP_SET] == ACTIVE
                     and sp_f[slot, j, SP_FROZEN] < 0.0):
                 sp_f[slot, j, SP_FROZEN] = max(sp_f[slot, j, SP_FN], 0.0)
                 count += 1

@@ -56,7 +56,7 @@ from .drivers import (
     collider_impulses,
     collider_poses,
 )
-from .verlet import OK, _check
+from .verlet import OK, RUNAWAY_STRETCH, _check
 
 NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-steps
 # per rod: steps, Newton iterations, sub-steps at the iteration cap, last relative update,
@@ -492,10 +492,12 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
                 r = isl[k]
                 n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
                 rod_internal_loads(r, rd)
-                # The predictor may overstretch an element next to a clamp that starts moving
-                # (x + h v everywhere else): only Newton's iterates count as runaway strain.
                 failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque,
                                          max_strain if it > 1 else math.inf)
+                if failed == OK and it == 1:
+                    failed, fail_at = _predictor_strain(n0, nn, e0, ne, hs, pos, xn, vn, dil,
+                                                        rest_len, fixed[boff[k]:boff[k + 1]],
+                                                        max_strain)
                 if failed != OK:
                     fail_rod = r
                     break
@@ -651,13 +653,13 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
                     and it < (round_start if m > 0 else 0) + EXTEND * max_iter):
                 budget += 1  # still contracting: a few more iterations cost less than halving
             if it == budget and update > tol and not early and not frozen and sources:
-                # About to give up: fix the contacts' friction bounds and go on.
+                # About to give up: fix the colliders' friction bounds and go on.
                 frozen = True
                 count = 0
                 for k in range(K):
                     n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
-                    count += freeze_friction_bounds(n0, nn, e0, ne, pos.shape[0], rd.sp_i,
-                                                    rd.sp_f)
+                    count += freeze_friction_bounds(n0, nn, e0, ne, pos.shape[0],
+                                                    planes.shape[0], rd.sp_i, rd.sp_f)
                 if count > 0:
                     budget = it + 2 * max_iter
                     round_start = it
@@ -750,6 +752,28 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
         status[isl[k], 2] = n_steps
         h_prev[isl[k]] = last_hs[k]
     return t
+
+
+@njit(cache=True, error_model="numpy")
+def _predictor_strain(n0, nn, e0, ne, h, pos, xn, vn, dil, rest_len, fixed, max_strain):
+    """(code, element) of the predictor's first runaway strain, as ``_check``, leaving out the
+    elements next to a prescribed node that did not move as its start velocity says (a clamp
+    set moving: x + h v everywhere else stretches that element, which says nothing of the
+    step; a rod that really runs away is caught there too, as before)."""
+    for j in range(ne):
+        if abs(dil[e0 + j] - 1.0) <= max_strain:
+            continue
+        jumped = False
+        for i in (j, (j + 1) % nn):
+            if fixed[2 * i]:
+                g = n0 + i
+                dx = math.sqrt((pos[g, 0] - xn[g, 0] - h * vn[g, 0]) ** 2
+                               + (pos[g, 1] - xn[g, 1] - h * vn[g, 1]) ** 2
+                               + (pos[g, 2] - xn[g, 2] - h * vn[g, 2]) ** 2)
+                jumped = jumped or dx > 0.1 * rest_len[e0 + j]
+        if not jumped:
+            return RUNAWAY_STRETCH, j
+    return OK, -1
 
 
 @njit(cache=True, error_model="numpy")
