@@ -759,7 +759,8 @@ def _predictor_strain(n0, nn, e0, ne, h, pos, xn, vn, dil, rest_len, fixed, max_
     """(code, element) of the predictor's first runaway strain, as ``_check``, leaving out the
     elements next to a prescribed node that did not move as its start velocity says (a clamp
     set moving: x + h v everywhere else stretches that element, which says nothing of the
-    step; a rod that really runs away is caught there too, as before)."""
+    step). Elsewhere, and next to clamps moving steadily or at rest, the predictor is checked
+    as Newton's iterates are: a hanging rod that overstretches is caught here."""
     for j in range(ne):
         if abs(dil[e0 + j] - 1.0) <= max_strain:
             continue
