@@ -50,6 +50,7 @@ from .segments import (
     MESH, P_MUK, P_MUS, _add_reaction, _mesh_closest, _rotate, _shape_closest,
     _to_local, _to_world, collider_penalty,
 )
+from ..kernels.refcount import NO_REFCOUNT
 
 SP_K = 2  # contact planes per query slot
 SP_COLS_I, SP_COLS_F = 5, 16
@@ -132,7 +133,7 @@ def _surface_velocity(src, n_planes, pose, twist, q):
             twist[c, 2] + twist[c, 3] * ry - twist[c, 4] * rx)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, src, gap, q, n, s, pose, n_planes):
     """Offer a plane of ``src`` (gap in m, point q and normal n in the world) to ``slot``:
     the ``SP_K`` nearest of different sources are kept (``keep_*`` holds the candidates)."""
@@ -158,7 +159,7 @@ def _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, src, gap, q, n, s, pose, 
     keep_n[k, 6] = s
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
     """Replace the slot's planes by the candidates, carrying over the friction anchor of a
     source that was there before; a new anchor is the slot's point at the step start
@@ -208,7 +209,7 @@ def _slot(k, n0, nn, e0, n_nodes, node_radius):
     return False, a, b, e0 + k - nn, n_nodes + e0 + k - nn, 0.5 * (node_radius[a] + node_radius[b])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, sp_f, keep_src,
                   keep_f, keep_n, x_start) -> int:
     """Find each slot's contact planes at the step start (positions ``X``, velocities ``V``;
@@ -314,7 +315,7 @@ def _plane_of(sp_f, slot, k, src, n_planes, pose):
     return q, n
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _node_pen(sp_i, sp_f, i, src):
     """Penetration (m, >= 0) of node ``i`` into the plane it has from ``src`` (0 if none), as
     last evaluated."""
@@ -324,7 +325,7 @@ def _node_pen(sp_i, sp_f, i, src):
     return 0.0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _law(src, n_planes, planes, par, mass, kmin, dt_ref):
     """Penalty stiffness (N/m), damping (N s/m) and friction coefficients of a source."""
     if src < n_planes:
@@ -335,7 +336,7 @@ def _law(src, n_planes, planes, par, mass, kmin, dt_ref):
     return k, c, par[col, P_MUS], par[col, P_MUK]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _add_contact_K(el_K, e, q, wn, wt, kn, ka, kb, n, sh):
     """Add one contact's stiffness to block ``q`` of element ``e``: ``wn kn n n^T`` (normal)
     plus ``wt`` times the friction's (``ka`` along the force direction ``sh``, ``kb`` across it
@@ -346,7 +347,7 @@ def _add_contact_K(el_K, e, q, wn, wt, kn, ka, kb, n, sh):
             el_K[e, q, i, j] += wn * kn * n[i] * n[j] + wt * (ka * sh[i] * sh[j] + kb * tij)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i, sp_f, commit,
                  stats) -> int:
     """Add the contact forces of rod ``r``'s slot planes at the iterate (positions ``X``,
@@ -492,7 +493,7 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
     return count
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def start_penetrations(r, n0, nn, e0, ne, h, X, planes, rd, cols, sp_i, sp_f, n_nodes):
     """Store each slot plane's penetration at the step start (``X``) as its ``d0``, and the
     depth its force leaves alone this step (``SP_OFF``): for a plane new to the slot what lies
@@ -522,7 +523,7 @@ def start_penetrations(r, n0, nn, e0, ne, h, X, planes, rd, cols, sp_i, sp_f, n_
             sp_f[slot, j, SP_OFF] = max(off - V_OUT * h, 0.0)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> None:
     """Move predicted node positions ``X`` that penetrate their contact planes back onto them
     (a Newton starting guess that already respects the contacts; ``fixed`` marks the
@@ -548,7 +549,7 @@ def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> None
                     X[i, d] += pen * n[d]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def release_pulling(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
     """At a converged iterate: release the active planes whose force pulls, and re-engage
     released planes that are now deeper than where their force starts (a release elsewhere
@@ -568,7 +569,7 @@ def release_pulling(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
     return count
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def freeze_friction_bounds(n0, nn, e0, ne, n_nodes, n_planes, sp_i, sp_f) -> int:
     """Fix the friction bound (mu N) of each acting collider plane at its normal force at the
     iterate, for the rest of the step; returns how many. World planes keep theirs: a rope

@@ -15,6 +15,7 @@ as it cannot tell that the blocks do not overlap.
 from __future__ import annotations
 
 from numba import njit
+from .refcount import NO_REFCOUNT
 
 BLOCK_BAND = 2  # coupled blocks are at most this many apart
 
@@ -117,7 +118,7 @@ def _store_sym(A, I, s) -> None:
     store_block(A, I, 0, (s[0], s[1], s[3], s[1], s[2], s[4], s[3], s[4], s[5]))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def block_cholesky(A, nb) -> int:
     """In-place square-root-free block Cholesky ``A = L D L^T`` (``L`` unit block lower
     triangular) of the first ``nb`` block rows; 0, or 1 + the first block row whose pivot
@@ -175,7 +176,7 @@ def _sub_atx(r, m, x):
             r[2] - (m[2] * x[0] + m[5] * x[1] + m[8] * x[2]))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def block_solve(A, nb, x) -> None:
     """Solve ``L D L^T x = b`` in place (``x`` holds b, shape (nb, 3)) with the block factor.
 

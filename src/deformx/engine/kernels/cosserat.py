@@ -40,6 +40,7 @@ from .bundles import (
     V_SCR_C,
     V_SCR_X,
 )
+from .refcount import NO_REFCOUNT
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -53,7 +54,7 @@ def rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed):
     return rod_node0[r], rod_elem0[r], rod_vor0[r], ne, nn, nv, closed
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def rod_internal_loads(r: int, rd) -> None:
     """Write internal forces (lab, N) and torques (material, N m) of rod ``r`` (bundles:
     the rods' arrays ``rd``, see :mod:`.bundles`).

@@ -20,6 +20,7 @@ from numba import njit
 
 from .bundles import D_A, D_AL, D_P, D_R, D_V, D_W
 from .so3 import rodrigues_coefficients
+from .refcount import NO_REFCOUNT
 
 
 @njit(cache=True, error_model="numpy")
@@ -89,7 +90,7 @@ def end_step(dl, dt) -> None:
         _end(dl, d, dt)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def step_rod_drivers(dl, dt, r, env, cols, end) -> None:
     """``begin_step`` (or with ``end`` ``end_step``) of only the drivers rod ``r`` uses: its
     clamps' (each once) and the colliders' (a batch of rods then does not integrate every
@@ -158,7 +159,7 @@ def pose_at(dl, d, tau):
             dl[d, D_P + 2] + tau * dl[d, D_V + 2]), R
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def clamp_values(tau, c0, c1, f0, f1, pos, Q, env, dl) -> None:
     """Clamped nodes and frames of one rod at ``tau`` s into the step."""
     for c in range(c0, c1):
@@ -185,7 +186,7 @@ def clamp_rate(dl, d, r0, r1, r2):
             dl[d, D_V + 2] + w0 * r1 - w1 * r0)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def clamp_rates(tau, c0, c1, f0, f1, pos, vel, Q, omega, env, dl) -> None:
     """Clamped nodes and frames of one rod take their driver's rates (angular: world ->
     material frame)."""
@@ -235,7 +236,7 @@ def add_frame_reaction(r, d, Q, e, t0, t1, t2, env) -> None:
         env.dreact[r, d, 3 + j] += Q[e, 0, j] * t0 + Q[e, 1, j] * t1 + Q[e, 2, j] * t2
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def add_impulse(r, h, c0, c1, f0, f1, env) -> None:
     """Accumulate ``h`` s of the last reactions of the rod's clamp drivers (each once)."""
     for c in range(c0, c1):
@@ -262,7 +263,7 @@ def _seen(env, c0, c1, f0, f1, d) -> bool:
     return False
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def collider_poses(r, tau, cols, dl) -> None:
     """Poses and twists of every collider as rod ``r`` sees them ``tau`` s into the step."""
     for c in range(cols.kind.shape[0]):
@@ -276,7 +277,7 @@ def collider_poses(r, tau, cols, dl) -> None:
             cols.twist[r, c, 3 + a] = dl[d, D_W + a]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def collider_impulses(r, h, cols, env) -> None:
     """Copy rod ``r``'s last contact wrench on each collider to its driver's reaction and
     accumulate ``h`` s of it into the impulse."""

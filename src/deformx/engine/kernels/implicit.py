@@ -57,6 +57,7 @@ from .drivers import (
     collider_poses,
 )
 from .verlet import OK, RUNAWAY_STRETCH, _check
+from .refcount import NO_REFCOUNT
 
 NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-steps
 # per rod: steps, Newton iterations, sub-steps at the iteration cap, last relative update,
@@ -112,7 +113,7 @@ def _rtbr(R, i, m, b0, b1, b2):
     return R[i] * b0 * R[m] + R[3 + i] * b1 * R[3 + m] + R[6 + i] * b2 * R[6 + m]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _assemble(h, ext, rd, nu, kv, geometric, A):
     """Newton matrix of one rod (extent ``ext``, see ``rod_extent``) into ``A`` (block band);
     returns the number of block rows.
@@ -237,7 +238,7 @@ def _assemble(h, ext, rd, nu, kv, geometric, A):
     return nb
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _rod_contacts(r, ext, h, rd, planes, cols, commit):
     """Contact forces of rod ``r``'s slot planes (world planes, meshes, primitives) at the
     iterate into ``force`` and ``contact_force`` (cleared first), their stiffness into
@@ -260,7 +261,7 @@ def _rod_contacts(r, ext, h, rd, planes, cols, commit):
                         rd.n3[N_VEL], planes, rd, cols, rd.sp_i, rd.sp_f, commit, rd.stats[r])
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _add_element_stiffness(A, e0, ne, nn, el_K):
     """Add each element's contact stiffness blocks (node a-a, b-a, b-b) to the Newton matrix."""
     for k in range(ne):
@@ -313,8 +314,47 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     rods' systems, solved exactly as banded factors plus a low-rank term (:mod:`.lowrank`):
     the rods share one Newton iteration, so each sees the others' end-of-step positions.
     Each rod sees the drivers as ``env.dloc[r]`` (advanced here).
+
+    This allocates the island's work arrays; the steps run in ``_advance_island``, compiled
+    without reference counting (it passes the rod bundle to a dozen calls per iteration).
     """
+    m = pc[1].shape[0]
+    K = isl.shape[0]
+    # The island's system stacks its rods' block rows; per rod its offsets in the stack.
+    boff = np.zeros(K + 1, dtype=np.int64)
+    noff = np.zeros(K + 1, dtype=np.int64)
+    eoff = np.zeros(K + 1, dtype=np.int64)
+    for k in range(K):
+        n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+        boff[k + 1] = boff[k] + 2 * ne + (0 if closed else 1)
+        noff[k + 1] = noff[k] + nn
+        eoff[k + 1] = eoff[k] + ne
+    nbt = boff[K]
+    offs = (boff, noff, eoff)
+    per_rod = (np.empty(K), np.empty(K), np.zeros(K), np.zeros(K))  # scale, last h, updates
+    system = (np.zeros((nbt, BLOCK_BAND + 1, 3, 3)), np.zeros((nbt, 3)),
+              np.zeros(nbt, dtype=np.bool_), np.zeros((noff[K], 3)), np.zeros((eoff[K], 3)))
+    # Contact planes per slot (see contact/speculative.py): scratch.
+    keep = (np.empty(SP_K, dtype=np.int64), np.empty(SP_K), np.empty((SP_K, 8)),
+            np.empty((SP_K, 3)))
+    # Rod-rod contacts: each node's block in the stack and rod slot, the low-rank terms.
+    n_nodes = rd.n3[N_POS].shape[0] if m > 0 else 0
+    lowrank = (np.zeros(n_nodes, dtype=np.int64), np.zeros(n_nodes, dtype=np.int64),
+               np.zeros((3 * m, nbt if m > 0 else 0, 3)), np.zeros((3 * m, 3 * m)),
+               np.zeros(3 * m, dtype=np.int64), np.zeros((3 * m, 3)), np.zeros(3 * m),
+               np.zeros((3 * m, 2), dtype=np.int64), np.zeros(3 * m))
+    return _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc,
+                           (offs, per_rod, system, keep, lowrank))
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
+    """The steps of ``advance_island_implicit`` in the work arrays ``work`` it allocated."""
     pairs, plist, pp, ps = pc
+    (boff, noff, eoff), (scale, last_hs, upd, prev_upd), system, keep, lowrank = work
+    A, rhs, fixed, acc, alpha = system
+    keep_src, keep_f, keep_n, x_start = keep
+    node_block, node_rod, Z, S, act, cdir, ck, csup, u = lowrank
     m = plist.shape[0]
     dt = sim[SIM_DT]
     gravity = sim[SIM_G:SIM_G + 3]
@@ -331,32 +371,16 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     planes = env.planes
     h = dt
     K = isl.shape[0]
-    # The island's system stacks its rods' block rows; per rod its offsets in the stack,
-    # mean element length (the update's scale) and last accepted sub-step.
-    boff = np.zeros(K + 1, dtype=np.int64)
-    noff = np.zeros(K + 1, dtype=np.int64)
-    eoff = np.zeros(K + 1, dtype=np.int64)
-    scale = np.empty(K)
-    last_hs = np.empty(K)
-    upd = np.zeros(K)
-    prev_upd = np.zeros(K)
+    nbt = boff[K]
+    # Per rod: mean element length (the update's scale) and last accepted sub-step.
     for k in range(K):
         r = isl[k]
         n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
-        boff[k + 1] = boff[k] + 2 * ne + (0 if closed else 1)
-        noff[k + 1] = noff[k] + nn
-        eoff[k + 1] = eoff[k] + ne
         length = 0.0
         for e in range(e0, e0 + ne):
             length += rest_len[e]
         scale[k] = length / ne
         last_hs[k] = h_prev[r]
-    nbt = boff[K]
-    A = np.zeros((nbt, BLOCK_BAND + 1, 3, 3))
-    rhs = np.zeros((nbt, 3))
-    fixed = np.zeros(nbt, dtype=np.bool_)
-    acc = np.zeros((noff[K], 3))  # predictor: h * (last step's acceleration), per node
-    alpha = np.zeros((eoff[K], 3))  # and per element
     # Clamped unknowns: their values are prescribed, so their rows/columns drop out.
     for k in range(K):
         r = isl[k]
@@ -371,27 +395,12 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
         n_cols = cols.kind.shape[0]
     sources = has_planes or n_cols > 0
     any_contact = sources or m > 0
-    # Contact planes per slot (see contact/speculative.py) and their scratch.
-    keep_src = np.empty(SP_K, dtype=np.int64)
-    keep_f = np.empty(SP_K)
-    keep_n = np.empty((SP_K, 8))
-    x_start = np.empty((SP_K, 3))
-    # Rod-rod contacts: each node's block in the stack and rod slot, the low-rank terms.
-    node_block = np.zeros(pos.shape[0] if m > 0 else 0, dtype=np.int64)
-    node_rod = np.zeros(pos.shape[0] if m > 0 else 0, dtype=np.int64)
     if m > 0:
         for k in range(K):
             n0, nn = rd.ri[R_NODE0][isl[k]], _extent(rd, isl[k])[4]
             for i in range(nn):
                 node_block[n0 + i] = boff[k] + 2 * i
                 node_rod[n0 + i] = k
-    Z = np.zeros((3 * m, nbt if m > 0 else 0, 3))
-    S = np.zeros((3 * m, 3 * m))
-    act = np.zeros(3 * m, dtype=np.int64)  # per pair a normal column, two with friction
-    cdir = np.zeros((3 * m, 3))
-    ck = np.zeros(3 * m)
-    csup = np.zeros((3 * m, 2), dtype=np.int64)
-    u = np.zeros(3 * m)
     n_act = 0
 
     done = 0  # full steps completed
@@ -754,7 +763,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     return t
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _predictor_strain(n0, nn, e0, ne, h, pos, xn, vn, dil, rest_len, fixed, max_strain):
     """(code, element) of the predictor's first runaway strain, as ``_check``, leaving out the
     elements next to a prescribed node that did not move as its start velocity says (a clamp
@@ -777,7 +786,7 @@ def _predictor_strain(n0, nn, e0, ne, h, pos, xn, vn, dil, rest_len, fixed, max_
     return OK, -1
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _clamp_reactions(r, tau, n0, e0, c0, c1, f0, f1, pos, Q, rhs, env, dl) -> None:
     """The load of rod ``r`` on its clamps' drivers: the residual (forces minus inertia) of
     the clamped rows, which the prescribed motion takes up."""

@@ -22,6 +22,7 @@ from numba import njit
 from ..contact.pairplanes import PP_KA, PP_KB, PP_KN, PP_N, PP_S, PP_SH, PP_T
 from .banded import block_solve
 from .bundles import E_SEG_A, E_SEG_B
+from .refcount import NO_REFCOUNT
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -45,7 +46,7 @@ def _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, y, ka, kb):
     return v
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed, act, cdir,
                    ck, csup, Z, S):
     """The active contacts' columns (per pair its normal and, with friction, two tangents:
@@ -108,7 +109,7 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
     return nc
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def lowrank_apply(nc, act, cdir, csup, pairs, rd, pp, node_block, node_rod, boff, fixed, Z, S,
                   u, y) -> None:
     """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y``."""
