@@ -344,6 +344,7 @@ class World:
         self._kernel = step.KERNELS[self.integrator, coupled]
         # Deepest start penetration per rod beyond what a step resolves (stable integrator).
         self._deep = self._rods_p["stats"][:, 5]
+        self._deep_clear = bytes(self._deep.nbytes)  # compared per step: 0.5 us, max() 1.7 us
         self._stale_env = False
 
     # ------------------------------------------------------------------ stepping
@@ -368,7 +369,7 @@ class World:
         if bad >= 0:
             self._raise_diverged(bad)
         self.time = t
-        if self._deep is not None and self._deep.max() > 0.0:
+        if self._deep is not None and self._deep.tobytes() != self._deep_clear:
             self._warn_deep()
 
     def _warn_deep(self) -> None:
