@@ -332,6 +332,8 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     nbt = boff[K]
     offs = (boff, noff, eoff)
     per_rod = (np.empty(K), np.empty(K), np.zeros(K), np.zeros(K))  # scale, last h, updates
+    # Newton matrix, residual, prescribed unknowns; the predictor's h * (last step's
+    # acceleration) per node and per element.
     system = (np.zeros((nbt, BLOCK_BAND + 1, 3, 3)), np.zeros((nbt, 3)),
               np.zeros(nbt, dtype=np.bool_), np.zeros((noff[K], 3)), np.zeros((eoff[K], 3)))
     # Contact planes per slot (see contact/speculative.py): scratch.
@@ -340,7 +342,8 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     # Rod-rod contacts: each node's block in the stack and rod slot, the low-rank terms.
     n_nodes = rd.n3[N_POS].shape[0] if m > 0 else 0
     # Z and S are written before they are read (each column zeroes the blocks it spans, see
-    # lowrank_factor): not zeroing them saves clearing megabytes per step in a pile.
+    # lowrank_factor): not zeroing them saves clearing megabytes per step in a pile. Per pair
+    # a normal column and, with friction, two tangent ones.
     lowrank = (np.zeros(n_nodes, dtype=np.int64), np.zeros(n_nodes, dtype=np.int64),
                np.empty((3 * m, nbt if m > 0 else 0, 3)), np.empty((3 * m, 3 * m)),
                np.zeros(3 * m, dtype=np.int64), np.zeros((3 * m, 3)), np.zeros(3 * m),

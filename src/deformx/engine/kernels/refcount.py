@@ -6,8 +6,9 @@ call. A rod step passes ~55 arrays and a mesh query ~20, so that counting cost u
 step. Functions compiled with ``NO_REFCOUNT`` (and, unless they say otherwise, everything they
 call) skip it: the explicit step (``advance_rod``), the mesh and rod-rod searches, and the
 stable integrator's steps (``implicit._advance_island``, which runs in work arrays its caller
-allocated) with the contact, solver and driver calls they make per Newton iteration. Safe for our kernels: they only borrow the caller's arrays for the duration of
-the call and allocate nothing (numba refuses to compile an allocation without counting, so a
+allocated) with the contact, solver and driver calls they make per Newton iteration. Safe for
+our kernels: they only borrow the caller's arrays for the duration of the call and allocate
+nothing (numba refuses to compile an allocation without counting, so a
 new allocation on such a path is a compile error, not a leak). ``_nrt`` is a private numba
 option: without it the kernels compile with plain counting.
 """
