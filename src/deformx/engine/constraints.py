@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from .drivers import Driver, vec3
+from .drivers import Driver, put3, vec3
 from .kernels.bundles import D_P, D_R, D_V, D_W
 
 if TYPE_CHECKING:
@@ -52,7 +52,7 @@ class Clamp(Driver):
         """Move the clamp now to ``position`` (m) and, for a frame clamp, ``directors``
         (3x3 rotation, rows d1, d2, d3) or ``rotation`` (world-from-material, its transpose)."""
         if position is not None:
-            self._row[D_P:D_P + 3] = vec3("position", position)
+            put3(self._row, D_P, vec3("position", position))
         for name, R in (("directors", directors), ("rotation", rotation)):
             if R is None:
                 continue
@@ -76,13 +76,13 @@ class Clamp(Driver):
         angular_velocity = angular if angular_velocity is None else angular_velocity
         row = self._row
         if velocity is not None:
-            row[D_V:D_V + 3] = vec3("velocity", velocity)
+            put3(row, D_V, vec3("velocity", velocity))
         if angular_velocity is not None:
-            row[D_W:D_W + 3] = self._check_spin("angular_velocity",
-                                                vec3("angular_velocity", angular_velocity))
+            put3(row, D_W, self._check_spin("angular_velocity",
+                                            vec3("angular_velocity", angular_velocity)))
 
-    def _check_spin(self, name: str, w: np.ndarray) -> np.ndarray:
-        if self.element is None and np.any(w != 0.0):
+    def _check_spin(self, name: str, w: tuple[float, float, float]) -> tuple[float, float, float]:
+        if self.element is None and w != (0.0, 0.0, 0.0):
             raise ValueError(f"{name}: this clamp is a pin (position only)")
         return w
 

@@ -14,7 +14,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .. import validation as check
-from ..drivers import Driver, pose_from, rotation, vec3
+from ..drivers import Driver, pose_from, put3, rotation, vec3
 from ..geometry.bvh import bvh_from_mesh, pseudonormals
 from ..kernels.bundles import D_P, D_V, D_W
 from ..packing import Packed
@@ -193,7 +193,7 @@ class Collider(Driver):
         world from local)."""
         p, R = pose_from(position, rotation)
         if p is not None:
-            self._row[D_P:D_P + 3] = p
+            put3(self._row, D_P, p)
         if R is not None:
             self._set_rotation(R)
 
@@ -207,9 +207,9 @@ class Collider(Driver):
         angular = angular if angular_velocity is None else angular_velocity
         row = self._row
         if linear is not None:
-            row[D_V:D_V + 3] = vec3("linear", linear)
+            put3(row, D_V, vec3("linear", linear))
         if angular is not None:
-            row[D_W:D_W + 3] = vec3("angular", angular)
+            put3(row, D_W, vec3("angular", angular))
 
     @property
     def vertices(self) -> np.ndarray | None:

@@ -11,6 +11,10 @@ our kernels: they only borrow the caller's arrays for the duration of the call a
 nothing (numba refuses to compile an allocation without counting, so a
 new allocation on such a path is a compile error, not a leak). ``_nrt`` is a private numba
 option: without it the kernels compile with plain counting.
+
+The world's arrays themselves are not counted anywhere: the entry kernels carve them as
+borrowed views without a meminfo (``bundles._borrow``), so even functions that count (those
+that allocate) pass them for free; only arrays allocated inside a call are counted there.
 """
 
 from __future__ import annotations
