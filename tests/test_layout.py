@@ -24,3 +24,9 @@ def test_visual_package_does_not_load_matplotlib_until_a_plot_module_is_used():
 def test_moved_modules_live_in_their_layers():
     assert _loaded_after("import deformx.apps.scenes, deformx.apps.bench, deformx.visual.plots",
                          ("deformx.scenes", "deformx.plotting", "deformx.bench")) == []
+
+
+def test_cosim_is_loaded_only_on_request_and_knows_no_higher_layer():
+    assert _loaded_after("import deformx", ("mujoco", "deformx.cosim")) == []
+    assert _loaded_after("import deformx.cosim, deformx.robots",
+                         ("deformx.visual", "deformx.apps", "matplotlib")) == []

@@ -15,14 +15,17 @@ def env_group(rods: Sequence, rods_p: Packed, planes: Sequence[np.ndarray],
               n_drivers: int) -> Packed:
     """Clamp tables (node / element and driver of each, per rod), planes and the drivers'
     per-rod copies and reactions."""
-    pn, fe = [], []
+    pn, fe, off, rel = [], [], [], []
     rod_pcon, rod_fcon = [0], [0]
     for i, rod in enumerate(rods):
         n0, e0 = int(rods_p["node0"][i]), int(rods_p["elem0"][i])
         for c in rod.clamps:
-            pn.append((n0 + c.node, c._driver))
+            if c.holds_position:
+                pn.append((n0 + c.node, c._driver))
+                off.append(c.offset)
             if c.element is not None:
                 fe.append((e0 + c.element, c._driver))
+                rel.append(c.relative)
         rod_pcon.append(len(pn))
         rod_fcon.append(len(fe))
     R = len(rods)
@@ -31,9 +34,10 @@ def env_group(rods: Sequence, rods_p: Packed, planes: Sequence[np.ndarray],
     env["rod_fcon"][:] = rod_fcon
     if pn:
         env["pcon_node"][:], env["pcon_drv"][:] = np.array(pn).T
+        env["pcon_off"][:] = np.array(off)
     if fe:
         env["fcon_elem"][:], env["fcon_drv"][:] = np.array(fe).T
-    env["fcon_rel"][:] = np.eye(3)
+        env["fcon_rel"][:] = np.array(rel)
     if planes:
         env["planes"][:] = np.array(planes)
     return env

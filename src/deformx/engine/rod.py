@@ -117,6 +117,7 @@ class Rod:
             masses[:-1] += 0.5 * self.density * area * rest_len
             masses[1:] += 0.5 * self.density * area * rest_len
         self.masses = masses
+        self.point_masses: dict[int, float] = {}  # node -> extra lumped mass (kg)
         self._inertia = np.outer(self.density * rest_len, [inertia, inertia, 2.0 * inertia])
         self._shear_matrix = np.tile(
             [ALPHA_SHEAR * self.shear_modulus * area, ALPHA_SHEAR * self.shear_modulus * area,
@@ -280,6 +281,12 @@ class Rod:
             raise ValueError("ignore: add the rod to a world first")
         self._world._ignore(self, colliders)
 
+    def unignore(self, *colliders) -> None:
+        """Touch these colliders again (undoes :meth:`ignore`; e.g. a gripper let go)."""
+        if self._world is None:
+            raise ValueError("unignore: add the rod to a world first")
+        self._world._ignore(self, colliders, ignore=False)
+
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:
         """A copy of everything of this rod that the next step depends on (positions,
@@ -354,8 +361,8 @@ class Rod:
         self._external_torques[...] = value
 
     # ------------------------------------------------------------------ boundary conditions
-    def _add_clamp(self, node: int, element: int | None) -> Clamp:
-        clamp = Clamp(self, node, element)
+    def _add_clamp(self, node: int, element: int | None, position: bool = True) -> Clamp:
+        clamp = Clamp(self, node, element, position)
         self._clamps.append(clamp)
         if self._world is not None:
             self._world._register_clamp(clamp)
@@ -383,6 +390,36 @@ class Rod:
         if not isinstance(node, (int, np.integer)) or not -self.n_nodes <= node < self.n_nodes:
             raise ValueError(f"node must be an integer in [{-self.n_nodes}, {self.n_nodes - 1}], got {node!r}")
         return self._add_clamp(int(node) % self.n_nodes, None)
+
+    def hold(self, node: int, frame: bool = False, position: bool = True) -> Clamp:
+        """Clamp node ``node`` (negative counts from the end) and, with ``frame``, the material
+        frame of the element next to it (the element starting there; the last one for the
+        last node): ``fix_start`` is ``hold(0, frame=True)``. ``position=False`` (with
+        ``frame``) holds the frame only and leaves the node free."""
+        if not isinstance(node, (int, np.integer)) or not -self.n_nodes <= node < self.n_nodes:
+            raise ValueError(f"node must be an integer in [{-self.n_nodes}, {self.n_nodes - 1}], got {node!r}")
+        if not position and not frame:
+            raise ValueError("hold: position=False needs frame=True (nothing would be held)")
+        node = int(node) % self.n_nodes
+        element = min(node, self.n_elements - 1) if frame else None
+        return self._add_clamp(node, element, position)
+
+    def set_point_mass(self, node: int, mass: float) -> None:
+        """Lump ``mass`` (kg) on node ``node`` (negative counts from the end) on top of the
+        rod's own, e.g. a light body the rod carries (0 removes it). ``masses`` includes it;
+        ``mass`` (the rod's own) does not. Takes effect at the next step, no rebuild."""
+        if not isinstance(node, (int, np.integer)) or not -self.n_nodes <= node < self.n_nodes:
+            raise ValueError(f"node must be an integer in [{-self.n_nodes}, {self.n_nodes - 1}], got {node!r}")
+        node = int(node) % self.n_nodes
+        mass = check.non_negative("mass", mass, "kg")
+        self.masses[node] += mass - self.point_masses.get(node, 0.0)
+        if mass > 0.0:
+            self.point_masses[node] = mass
+        else:
+            self.point_masses.pop(node, None)
+        w = self._world
+        if w is not None and w._rods_p is not None and not w._stale_rods:
+            w._rods_p["mass"][int(w._rods_p["node0"][self._index]) + node] = self.masses[node]
 
     @property
     def clamps(self) -> tuple[Clamp, ...]:

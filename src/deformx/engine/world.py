@@ -274,11 +274,14 @@ class World:
     def colliders(self) -> tuple[col.Collider, ...]:
         return tuple(self._colliders)
 
-    def _ignore(self, rod: Rod, colliders: Sequence[col.Collider]) -> None:
+    def _ignore(self, rod: Rod, colliders: Sequence[col.Collider], ignore: bool = True) -> None:
         for c in colliders:
             if not isinstance(c, col.Collider) or c._table is not self._drivers:
                 raise ValueError(f"ignore: {c!r} is not a collider of this world")
-            self._ignored.add((rod._index, c.index))
+            if ignore:
+                self._ignored.add((rod._index, c.index))
+            else:
+                self._ignored.discard((rod._index, c.index))
         self._stale_env = True
 
     # ------------------------------------------------------------------ drivers

@@ -1,0 +1,434 @@
+"""Co-simulation of rods with a rigid-body simulator: the paper's Algorithm 1, two-way.
+
+Per macro step (the backend's ``dt``): read every coupled body's frame motion (pose, twist,
+acceleration); hand it to the engine's kinematic drivers (attachment clamps and the body's
+colliders), which extrapolate it inside the rod substeps by semi-implicit Euler on SE(3)
+(equations 1-2); advance the rods; take each driver's impulse over the macro step, move its
+torque to the body's centre of mass and apply the mean wrench (impulse / dt) to the body for
+the backend's step; step the backend. The rods own every wire contact; the backend owns the
+bodies and their own contacts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from time import perf_counter
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..engine import validation as check
+from ..engine.constraints import Clamp
+from ..engine.contact.colliders import Collider
+from ..engine.rod import Rod
+from ..engine.world import World
+from .backend import Backend, BodyMotion, Geom
+
+
+@dataclass
+class Attachment:
+    """A rod node (and frame) held by a body.
+
+    ``coupling`` "kinematic": ``clamp`` holds the node (and frame) where the body's predicted
+    motion puts it and the clamp's reaction goes back to the body. "inertial": the body's
+    ``mass`` rides on the node inside the rod's solve (the node is free; ``clamp``, if any,
+    holds the frame only) and the body is given the wrench that makes it follow the node.
+    """
+
+    rod: Rod
+    node: int
+    body: str
+    clamp: Clamp | None
+    offset: np.ndarray
+    coupling: str = "kinematic"
+    mass: float = 0.0
+    _force: np.ndarray = field(default_factory=lambda: np.zeros(3))  # added to fext (N)
+    _v0: np.ndarray = field(default_factory=lambda: np.zeros(3))     # node velocity at start
+    _a0: np.ndarray = field(default_factory=lambda: np.zeros(3))     # body point's free acc.
+
+
+@dataclass
+class BodyColliders:
+    """The colliders standing for one body's geoms."""
+
+    body: str
+    static: bool
+    colliders: list[Collider] = field(default_factory=list)
+    geoms: list[Geom] = field(default_factory=list)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
+def point_motion(m: BodyMotion, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity and acceleration of the body-fixed point at world offset ``r`` from the
+    frame's origin (rigid-body kinematics)."""
+    w = m.angular_velocity
+    v = m.velocity + _cross(w, r)
+    a = m.acceleration + _cross(m.angular_acceleration, r) + _cross(w, _cross(w, r))
+    return v, a
+
+
+class CoSimulation:
+    """Rods in ``world`` coupled two-way with the bodies of ``backend``.
+
+    ``substeps``: rod steps per macro step; None takes ``backend.dt / world.dt``, which must be
+    a whole number (with ``integrator="stable"`` one substep at the backend's step is the
+    normal case); given, it sets ``world.dt = backend.dt / substeps``.
+    """
+
+    def __init__(self, world: World, backend: Backend, substeps: int | None = None) -> None:
+        if not isinstance(world, World):
+            raise ValueError(f"world must be a deformx.World, got {type(world).__name__}")
+        self.world = world
+        self.backend = backend
+        T = float(backend.dt)
+        if substeps is None:
+            ratio = T / world.dt
+            n = int(round(ratio))
+            if n < 1 or abs(ratio - n) > 1e-9 * ratio:
+                raise ValueError(f"substeps: the backend's dt ({T:g} s) is not a whole number "
+                                 f"of world.dt ({world.dt:g} s); give substeps or set world.dt "
+                                 f"to {T:g} / n")
+        else:
+            if not isinstance(substeps, (int, np.integer)) or substeps < 1:
+                raise ValueError(f"substeps must be an integer >= 1, got {substeps!r}")
+            n = int(substeps)
+            world.dt = T / n
+        self.substeps = n
+        self.attachments: list[Attachment] = []
+        self.bodies: dict[str, BodyColliders] = {}
+        self._wrench: dict[str, np.ndarray] = {}
+        self._coupled: list[str] = []  # moving bodies with attachments or colliders
+        self._inertial: list[str] = []  # bodies riding on rod nodes
+        self._steps = 0
+        self.profile = False  # when True, step() adds its phases' seconds to `timings`
+        self.reset_timings()
+
+    # ------------------------------------------------------------------ building
+    @property
+    def time(self) -> float:
+        """Simulated time (s) of the backend (the rods' time equals it after each step)."""
+        return self.backend.time
+
+    @property
+    def dt(self) -> float:
+        """The macro step (s): the backend's step."""
+        return float(self.backend.dt)
+
+    def _check_body(self, body: str) -> str:
+        if not isinstance(body, str) or not self.backend.has_body(body):
+            # the backend's own error names the bodies it has
+            getattr(self.backend, "body_id", lambda b: None)(body)
+            raise ValueError(f"body: no body named {body!r} in the backend")
+        return body
+
+    def _static(self, body: str) -> bool:
+        is_static = getattr(self.backend, "is_static", None)
+        return bool(is_static(body)) if is_static is not None else body == "world"
+
+    def _refresh_coupled(self) -> None:
+        names = {a.body for a in self.attachments}
+        names |= {b for b, bc in self.bodies.items() if not bc.static}
+        self._coupled = sorted(n for n in names if not self._static(n))
+        self._inertial = sorted({a.body for a in self.attachments if a.coupling == "inertial"})
+
+    def attach(self, rod: Rod, end: str | int = "start", body: str = "world",
+               offset: Sequence[float] = (0.0, 0.0, 0.0), frame: bool = True,
+               coupling: str = "auto") -> Attachment:
+        """Hold ``rod``'s ``end`` ("start", "end" or a node index) with ``body``.
+
+        The node sits at ``offset`` (m, body frame) from the body's origin - the rod's node
+        must already be there (within half an element) - and with ``frame`` the element's
+        material frame keeps the rotation relative to the body that it has now. The rod's
+        reaction goes back to the body; the rod ignores contact with that body's colliders.
+
+        ``coupling``: "kinematic" (the body's predicted motion drives the node; the rod's
+        reaction is applied to the body after the rods' step: right for robots and heavy or
+        jointed bodies), "inertial" (the body's mass rides on the node inside the rod's
+        solve and the body follows the node: stable for a light free body on a stiff wire,
+        where the explicit feedback of "kinematic" diverges), or "auto" ("inertial" for a free
+        body with no children, else "kinematic"). See ``docs/cosim.md``.
+        """
+        if not isinstance(rod, Rod) or rod._world is not self.world:
+            raise ValueError("rod must be a rod of this co-simulation's world")
+        if end == "start":
+            node = 0
+        elif end == "end":
+            node = rod.n_nodes - 1
+        elif isinstance(end, (int, np.integer)) and -rod.n_nodes <= end < rod.n_nodes:
+            node = int(end) % rod.n_nodes
+        else:
+            raise ValueError(f"end must be 'start', 'end' or a node index in "
+                             f"[{-rod.n_nodes}, {rod.n_nodes - 1}], got {end!r}")
+        self._check_body(body)
+        self.backend.begin()
+        m = self.backend.motion(body)
+        off = np.array(check.vector3("offset", offset), dtype=np.float64)
+        target = m.position + m.rotation @ off
+        gap = float(np.linalg.norm(rod.positions[node] - target))
+        if gap > 0.5 * float(rod.rest_lengths.min()):
+            raise ValueError(f"attach: node {node} of the rod is {gap:.4g} m from the attachment "
+                             f"point {np.round(target, 5).tolist()} (body {body!r} + offset); "
+                             "build the rod with that node there")
+        if coupling not in ("auto", "kinematic", "inertial"):
+            raise ValueError(f"coupling must be 'auto', 'kinematic' or 'inertial', got "
+                             f"{coupling!r}")
+        free = getattr(self.backend, "free_mass", lambda b: None)(body)
+        if coupling == "inertial" and free is None:
+            raise ValueError(f"coupling='inertial' needs a free body (one free joint, no child "
+                             f"bodies); {body!r} is not one: use 'kinematic'")
+        if coupling == "auto":
+            coupling = "inertial" if free is not None else "kinematic"
+        if self._static(body):
+            coupling = "kinematic"
+        if any(a.rod is rod and a.node == node for a in self.attachments):
+            raise ValueError(f"attach: node {node} of this rod is attached already")
+        rod.positions[node] = target
+        clamp = None
+        if coupling == "kinematic" or frame:
+            clamp = rod.hold(node, frame=frame, position=coupling == "kinematic")
+            clamp.rebase(m.position, m.rotation)
+        att = Attachment(rod=rod, node=node, body=body, clamp=clamp, offset=off,
+                         coupling=coupling, mass=0.0 if free is None else free)
+        if coupling == "inertial":
+            rod.set_point_mass(node, att.mass)
+            rod.velocities[node] = point_motion(m, m.rotation @ off)[0]
+        self.attachments.append(att)
+        if body in self.bodies:
+            rod.ignore(*self.bodies[body].colliders)
+        self._refresh_coupled()
+        return att
+
+    def detach(self, what: Rod | Attachment, end: str | int | None = None) -> None:
+        """Release an attachment (or every attachment of a rod, or of its ``end``): the
+        rod end is free from the next step on and touches that body's colliders again."""
+        if isinstance(what, Attachment):
+            chosen = [what]
+        else:
+            chosen = [a for a in self.attachments if a.rod is what]
+            if end is not None:
+                node = {"start": 0, "end": what.n_nodes - 1}.get(end, end)
+                chosen = [a for a in chosen if a.node == int(node) % what.n_nodes]
+        if not chosen or any(a not in self.attachments for a in chosen):
+            raise ValueError("detach: no such attachment")
+        for a in chosen:
+            self.attachments.remove(a)
+            if a.clamp is not None:
+                a.clamp.release()
+            if a.coupling == "inertial":
+                a.rod.set_point_mass(a.node, 0.0)
+                self.backend.apply_wrench(a.body, np.zeros(3), np.zeros(3))
+            if a.body in self.bodies and not any(
+                    b.rod is a.rod and b.body == a.body for b in self.attachments):
+                a.rod.unignore(*self.bodies[a.body].colliders)
+        self._refresh_coupled()
+
+    def add_colliders(self, body: str, stiffness: float | None = None,
+                      damping: float | None = None, friction: float | None = None
+                      ) -> list[Collider]:
+        """Every collision geom of ``body`` becomes a rod collider moving with it (a static
+        body's once, fixed); the rods' contact reactions go back to the body. Contact
+        ``stiffness`` / ``damping`` as for :meth:`deformx.World.add_mesh`; ``friction``
+        defaults to each geom's own. Rods attached to the body ignore them."""
+        self._check_body(body)
+        if body in self.bodies:
+            raise ValueError(f"add_colliders: body {body!r} already has its colliders")
+        static = self._static(body)
+        self.backend.begin()
+        m = self.backend.motion(body)
+        bc = BodyColliders(body=body, static=static)
+        w = self.world
+        for g in self.backend.geoms(body):
+            mu = g.friction if friction is None else friction
+            kw = dict(stiffness=stiffness, damping=damping, friction=mu)
+            R = m.rotation @ g.rotation
+            p = m.position + m.rotation @ g.position
+            if g.kind == "plane":
+                if not static:
+                    raise ValueError(f"add_colliders: plane geom {g.name!r} on the moving body "
+                                     f"{body!r}; rods only collide with static planes")
+                w.add_plane(point=p, normal=R[:, 2], **kw)
+                continue
+            pose = (p, R)
+            if g.kind == "sphere":
+                c = w.add_sphere(float(g.size[0]), center=p, **kw)
+            elif g.kind == "box":
+                c = w.add_box(g.size[:3], pose=pose, **kw)
+            elif g.kind == "capsule":
+                c = w.add_capsule(float(g.size[0]), 2.0 * float(g.size[1]), pose=pose, **kw)
+            elif g.kind == "cylinder":
+                c = w.add_cylinder(float(g.size[0]), 2.0 * float(g.size[1]), pose=pose, **kw)
+            else:
+                c = w.add_mesh((g.vertices, g.faces), pose=pose, **kw)
+            if g.kind == "sphere":
+                c.set_pose(rotation=R)
+            bc.colliders.append(c)
+            bc.geoms.append(g)
+        self.bodies[body] = bc
+        for a in self.attachments:
+            if a.body == body and bc.colliders:
+                a.rod.ignore(*bc.colliders)
+        self._refresh_coupled()
+        return list(bc.colliders)
+
+    # ------------------------------------------------------------------ stepping
+    def _drive(self, motions: dict[str, BodyMotion]) -> None:
+        for a in self.attachments:
+            m = motions.get(a.body)
+            c = a.clamp
+            if m is None:  # static body: the clamp stays where it is
+                c.reset_impulse()
+                continue
+            if a.coupling == "inertial":
+                self._ride(a, m)
+                if c is None:
+                    continue
+            c.set_pose(position=m.position, rotation=m.rotation)
+            c.set_velocity(m.velocity, m.angular_velocity)
+            c.set_acceleration(m.acceleration, m.angular_acceleration)
+            c.reset_impulse()
+        for name, bc in self.bodies.items():
+            m = motions.get(name)
+            if m is None:
+                continue
+            for c, g in zip(bc.colliders, bc.geoms):
+                r = m.rotation @ g.position
+                v, a = point_motion(m, r)
+                c.set_pose(position=m.position + r, rotation=m.rotation @ g.rotation)
+                c.set_velocity(v, m.angular_velocity)
+                c.set_acceleration(a, m.angular_acceleration)
+                c.reset_impulse()
+
+    def _ride(self, a: Attachment, m: BodyMotion) -> None:
+        """An inertial attachment before the rods' step: the node starts where the body's
+        point is, with its velocity, and carries the body's mass and the body's other loads
+        (its free acceleration, from the backend with no rod wrench, less gravity, which the
+        node's mass already feels)."""
+        r = m.rotation @ a.offset
+        v, acc = point_motion(m, r)
+        a.rod.positions[a.node] = m.position + r
+        a.rod.velocities[a.node] = v
+        a._v0, a._a0 = v, acc
+        a._force = a.mass * (acc - self.world.gravity)
+        a.rod.external_forces[a.node] += a._force
+
+    def _feed_back(self, motions: dict[str, BodyMotion]) -> None:
+        T = self.dt
+        for a in self.attachments:
+            if a.coupling == "inertial" and a.body in motions:
+                a.rod.external_forces[a.node] -= a._force
+        for name in self._coupled:
+            m = motions[name]
+            F = np.zeros(3)
+            tau = np.zeros(3)
+            # each driver's torque is about its origin at the step's start; move it to the COM
+            for a in self.attachments:
+                if a.body != name:
+                    continue
+                if a.coupling == "inertial":
+                    # the force that gives the body the node's velocity change in its step
+                    f = a.mass * ((a.rod.velocities[a.node] - a._v0) / T - a._a0) * T
+                    F += f
+                    tau += _cross(m.position + m.rotation @ a.offset - m.com, f)
+                if a.clamp is not None:
+                    imp = a.clamp.impulse
+                    F += imp[:3]
+                    tau += imp[3:] + _cross(m.position - m.com, imp[:3])
+            bc = self.bodies.get(name)
+            if bc is not None:
+                for c, g in zip(bc.colliders, bc.geoms):
+                    imp = c.impulse
+                    origin = m.position + m.rotation @ g.position
+                    F += imp[:3]
+                    tau += imp[3:] + _cross(origin - m.com, imp[:3])
+            wrench = np.concatenate([F, tau]) / T
+            self._wrench[name] = wrench
+            self.backend.apply_wrench(name, wrench[:3], wrench[3:])
+
+    def step(self) -> None:
+        """One macro step of Algorithm 1 (see the module docstring)."""
+        be = self.backend
+        clock = perf_counter if self.profile else None
+        if clock:
+            t0 = clock()
+        for name in self._inertial:
+            be.apply_wrench(name, np.zeros(3), np.zeros(3))  # its free acceleration is read
+        be.begin()
+        if clock:
+            t1 = clock()
+        motions = {name: be.motion(name) for name in self._coupled}
+        self._drive(motions)
+        if clock:
+            t2 = clock()
+        self.world.step(self.substeps)
+        if clock:
+            t3 = clock()
+        self._feed_back(motions)
+        if clock:
+            t4 = clock()
+        be.step()
+        self._steps += 1
+        if clock:
+            t5 = clock()
+            tm = self.timings
+            tm["backend"] += (t1 - t0) + (t5 - t4)
+            tm["coupling"] += (t2 - t1) + (t4 - t3)
+            tm["rods"] += t3 - t2
+            tm["steps"] += 1
+
+    def reset_timings(self) -> None:
+        """Zero :attr:`timings` (seconds spent per phase, summed over steps while
+        :attr:`profile` is True: "backend" (its forward pass and step), "rods" (the world's
+        step), "coupling" (reading motions, setting drivers, wrenches), "steps")."""
+        self.timings = dict(backend=0.0, rods=0.0, coupling=0.0, steps=0)
+
+    def run(self, duration: float, callbacks: Sequence[Any] = (), progress: bool = False
+            ) -> None:
+        """Advance by ``duration`` s (whole macro steps); each callback (a callable with an
+        ``every`` attribute, s) is called with this co-simulation at the start and every
+        ``every`` s of simulated time."""
+        duration = check.non_negative("duration", duration, "s")
+        T = self.dt
+        n_total = int(round(duration / T))
+        periods = []
+        for cb in callbacks:
+            if not callable(cb) or not hasattr(cb, "every"):
+                raise ValueError("callbacks must be callables with an `every` attribute (s), "
+                                 f"got {cb!r}")
+            periods.append(max(1, int(round(check.positive("callback.every", cb.every, "s")
+                                            / T))))
+        bar = None
+        if progress:
+            from rich.progress import Progress
+            bar = Progress(transient=True)
+            bar.start()
+            task = bar.add_task(f"co-simulating {duration:g} s", total=n_total)
+        try:
+            for k in range(n_total + 1):
+                for cb, p in zip(callbacks, periods):
+                    if k % p == 0:
+                        cb(self)
+                if k == n_total:
+                    break
+                self.step()
+                if bar is not None and k % 50 == 0:
+                    bar.update(task, completed=k + 1)
+        finally:
+            if bar is not None:
+                bar.stop()
+
+    def wrench(self, body: str) -> np.ndarray:
+        """The last macro step's mean force (N) and torque (N m, about the body's centre of
+        mass) the rods put on ``body``, world frame (6)."""
+        self._check_body(body)
+        return self._wrench.get(body, np.zeros(6)).copy()
+
+    def __repr__(self) -> str:
+        return (f"CoSimulation(rods={len(self.world.rods)}, attachments={len(self.attachments)}, "
+                f"bodies={self._coupled}, dt={self.dt:g}, substeps={self.substeps})")
+
+
+__all__ = ["Attachment", "CoSimulation", "point_motion"]

@@ -1,0 +1,167 @@
+"""Co-simulation with MuJoCo (Algorithm 1, two-way): static loads reach MuJoCo, momentum is
+conserved across the coupling, the SE(3) predictor matches MuJoCo's integrator, a light body
+on a stiff wire stays stable and settles to the analytical stretch."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+import deformx as dx
+from deformx import cosim
+
+G = 9.81
+
+
+def _rope(start, direction, length=0.5, n=20, radius=0.005, density=1000.0, E=1e6,
+          damping=0.0):
+    return dx.Rod.straight(n_elements=n, start=start, direction=direction, length=length,
+                           radius=radius, density=density, youngs_modulus=E, damping=damping)
+
+
+def test_rope_hanging_from_a_spring_slide_stretches_it_by_the_total_weight():
+    k, M = 100.0, 1.0
+    xml = f"""<mujoco><option timestep="0.002"/><worldbody>
+      <body name="carriage" pos="0 0 1">
+        <joint type="slide" axis="0 0 1" stiffness="{k}" damping="4"/>
+        <geom type="box" size="0.02 0.02 0.02" mass="{M}" contype="0" conaffinity="0"/>
+      </body></worldbody></mujoco>"""
+    world = dx.World(dt=2e-3, integrator="stable")
+    rod = world.add_rod(_rope((0, 0, 1), (0, 0, -1), damping=2.0))
+    backend = cosim.MujocoBackend(xml)
+    sim = cosim.CoSimulation(world, backend)
+    att = sim.attach(rod, "start", body="carriage")
+    assert att.coupling == "kinematic"  # a jointed body
+    sim.run(4.0)
+    expected = -(M + rod.mass) * G / k
+    assert backend.data.qpos[0] == pytest.approx(expected, rel=0.02)
+    # the mean wrench of the last step is the rope's weight, and the rope follows the body
+    assert sim.wrench("carriage")[2] == pytest.approx(-rod.mass * G, rel=0.02)
+    assert abs(sim.time - world.time) < 1e-9
+
+
+def _floor_force_on(backend, body):
+    m, d = backend.model, backend.data
+    mujoco.mj_forward(m, d)
+    total, f = 0.0, np.zeros(6)
+    bid = backend.body_id(body)
+    for i in range(d.ncon):
+        c = d.contact[i]
+        if bid in (m.geom_bodyid[c.geom1], m.geom_bodyid[c.geom2]):
+            mujoco.mj_contactForce(m, d, i, f)
+            total += f[0] * c.frame[2]  # normal force along the contact normal, world z part
+    return abs(total)
+
+
+def test_rope_resting_on_a_free_box_loads_mujocos_floor_with_its_weight():
+    M = 0.25  # the rope (60 g) is a quarter of it: the wrench must reach MuJoCo
+    xml = f"""<mujoco><option timestep="0.002"/><worldbody>
+      <geom name="floor" type="plane" size="0 0 1"/>
+      <body name="box" pos="0 0 0.05"><freejoint/>
+        <geom type="box" size="0.25 0.25 0.05" mass="{M}"/></body>
+      </worldbody></mujoco>"""
+    world = dx.World(dt=2e-3, integrator="stable")
+    rod = world.add_rod(_rope((-0.15, 0, 0.12), (1, 0, 0), length=0.3, n=15, radius=0.008,
+                              damping=2.0))
+    backend = cosim.MujocoBackend(xml)
+    sim = cosim.CoSimulation(world, backend)
+    sim.add_colliders("box")
+    sim.run(2.0)
+    assert rod.positions[:, 2].max() < 0.11  # the rope lies on the box's top face (z = 0.1)
+    assert _floor_force_on(backend, "box") == pytest.approx((M + rod.mass) * G, rel=0.02)
+    assert sim.wrench("box")[2] == pytest.approx(-rod.mass * G, rel=0.02)
+
+
+@pytest.mark.parametrize("coupling", ["kinematic", "inertial"])
+def test_momentum_of_rope_and_body_equals_the_applied_impulse(coupling):
+    M, F = 0.5, np.array([0.3, 0.0, 0.1])
+    xml = f"""<mujoco><option timestep="0.002" gravity="0 0 0"/><worldbody>
+      <body name="puck" pos="0 0 0"><freejoint/>
+        <geom type="sphere" size="0.03" mass="{M}" contype="0" conaffinity="0"/></body>
+      </worldbody></mujoco>"""
+    world = dx.World(dt=2e-3, integrator="stable", gravity=(0, 0, 0))
+    rod = world.add_rod(_rope((0, 0, 0), (1, 0, 0), length=0.4, n=16))
+    backend = cosim.MujocoBackend(xml)
+    sim = cosim.CoSimulation(world, backend)
+    sim.attach(rod, "start", body="puck", coupling=coupling)
+    rod.external_forces[-1] = F
+    duration = 0.5
+    sim.run(duration)
+    own = rod.masses.copy()
+    for node, m in rod.point_masses.items():
+        own[node] -= m
+    p_rope = (own[:, None] * rod.velocities).sum(axis=0)
+    res = np.zeros(6)
+    mujoco.mj_forward(backend.model, backend.data)
+    mujoco.mj_objectVelocity(backend.model, backend.data, mujoco.mjtObj.mjOBJ_BODY,
+                             backend.body_id("puck"), res, 0)
+    p_total = p_rope + M * res[3:]
+    np.testing.assert_allclose(p_total, F * duration, rtol=0.0, atol=0.01 * np.linalg.norm(F) * duration)
+
+
+def test_predictor_equals_mujocos_integration_of_a_free_body():
+    """Constant acceleration (gravity) and constant twist (a sphere spinning about an axis):
+    the collider's driver after one macro step sits where MuJoCo puts the body."""
+    xml = """<mujoco><option timestep="0.002"/><worldbody>
+      <body name="ball" pos="0.1 0.2 1.0"><freejoint/>
+        <geom type="sphere" size="0.05" mass="1.0"/></body></worldbody></mujoco>"""
+    world = dx.World(dt=2e-3, integrator="stable")
+    world.add_rod(_rope((5, 5, 0.5), (1, 0, 0), length=0.2, n=4))  # far away: no contact
+    backend = cosim.MujocoBackend(xml)
+    backend.data.qvel[:] = [0.3, -0.2, 1.0, 0.0, 0.0, 7.0]  # linear (world), angular (local)
+    sim = cosim.CoSimulation(world, backend)
+    (ball,) = sim.add_colliders("ball")
+    for _ in range(25):
+        sim.step()
+        mujoco.mj_kinematics(backend.model, backend.data)
+        i = backend.body_id("ball")
+        np.testing.assert_allclose(ball.position, backend.data.xpos[i], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(ball.rotation, backend.data.xmat[i].reshape(3, 3), rtol=0,
+                                   atol=1e-12)
+    assert np.all(sim.wrench("ball") == 0.0)
+
+
+def test_light_body_on_a_stiff_steel_wire_settles_to_the_static_stretch():
+    """50 g on 1 m of steel wire (E 2e11, r 0.5 mm) at MuJoCo's 2 ms: the axial mode's
+    period is 3.5 ms, so the body's mass has to ride in the rod's implicit solve."""
+    M, E, r, L, rho = 0.05, 2e11, 5e-4, 1.0, 7850.0
+    xml = f"""<mujoco><option timestep="0.002"/><worldbody>
+      <body name="weight" pos="0 0 0"><freejoint/>
+        <geom type="sphere" size="0.01" mass="{M}" contype="0" conaffinity="0"/></body>
+      </worldbody></mujoco>"""
+    world = dx.World(dt=2e-3, integrator="stable", tolerance=1e-8)
+    rod = world.add_rod(dx.Rod.straight(n_elements=20, start=(0, 0, L), direction=(0, 0, -1),
+                                        length=L, radius=r, density=rho, youngs_modulus=E))
+    rod.fix_start()
+    backend = cosim.MujocoBackend(xml)
+    backend.data.qvel[2] = -0.05  # a kick: 5 cm/s down
+    sim = cosim.CoSimulation(world, backend)
+    att = sim.attach(rod, "end", body="weight", frame=False)
+    assert att.coupling == "inertial"
+    sim.run(1.0)
+    stretch = (M + rod.mass / 2) * G * L / (E * math.pi * r * r)
+    assert -rod.positions[-1, 2] == pytest.approx(stretch, rel=0.05)
+    mujoco.mj_kinematics(backend.model, backend.data)
+    assert -backend.data.xpos[backend.body_id("weight"), 2] == pytest.approx(stretch, rel=0.05)
+    assert abs(backend.data.qvel[2]) < 1e-6
+
+
+def test_attach_checks_its_arguments():
+    xml = """<mujoco><worldbody><body name="b" pos="0 0 1"><freejoint/>
+      <geom type="sphere" size="0.01" mass="0.1"/></body></worldbody></mujoco>"""
+    world = dx.World(dt=2e-3, integrator="stable")
+    rod = world.add_rod(_rope((0, 0, 1), (1, 0, 0)))
+    sim = cosim.CoSimulation(world, cosim.MujocoBackend(xml))
+    with pytest.raises(ValueError, match="no body named 'nope'"):
+        sim.attach(rod, "start", body="nope")
+    with pytest.raises(ValueError, match="end must be"):
+        sim.attach(rod, "middle", body="b")
+    with pytest.raises(ValueError, match="from the attachment point"):
+        sim.attach(rod, "end", body="b")
+    with pytest.raises(ValueError, match="whole number"):
+        cosim.CoSimulation(dx.World(dt=3e-4), cosim.MujocoBackend(xml))
+    with pytest.raises(ValueError, match="MJCF"):
+        cosim.MujocoBackend("/no/such/file.xml")
