@@ -23,6 +23,8 @@ from ..engine.contact.colliders import Collider
 from ..engine.rod import Rod
 from ..engine.world import World
 from .backend import Backend, BodyMotion, Geom
+from .kernels import (M_A, M_AL, M_COLS, M_COM, M_P, M_R, M_V, M_W, drive_rows,
+                      wrenches_from_impulses)
 
 
 @dataclass
@@ -45,6 +47,7 @@ class Attachment:
     _force: np.ndarray = field(default_factory=lambda: np.zeros(3))  # added to fext (N)
     _v0: np.ndarray = field(default_factory=lambda: np.zeros(3))     # node velocity at start
     _a0: np.ndarray = field(default_factory=lambda: np.zeros(3))     # body point's free acc.
+    _r: np.ndarray = field(default_factory=lambda: np.zeros(3))      # node from body origin
 
 
 @dataclass
@@ -58,8 +61,14 @@ class BodyColliders:
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
-                     a[0] * b[1] - a[1] * b[0]])
+    """a x b over the last axis (numpy's cross costs ~30 us a call on small arrays)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a1 * b2 - a2 * b1
+    out[..., 1] = a2 * b0 - a0 * b2
+    out[..., 2] = a0 * b1 - a1 * b0
+    return out
 
 
 def point_motion(m: BodyMotion, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -100,8 +109,10 @@ class CoSimulation:
         self.substeps = n
         self.attachments: list[Attachment] = []
         self.bodies: dict[str, BodyColliders] = {}
-        self._wrench: dict[str, np.ndarray] = {}
+        self._wrenches = np.zeros((0, 6))  # last step's, one row per body of _coupled
         self._coupled: list[str] = []  # moving bodies with attachments or colliders
+        self._index: dict[str, int] = {}
+        self._drivers: list = []
         self._inertial: list[str] = []  # bodies riding on rod nodes
         self._steps = 0
         self.profile = False  # when True, step() adds its phases' seconds to `timings`
@@ -133,7 +144,9 @@ class CoSimulation:
         names = {a.body for a in self.attachments}
         names |= {b for b, bc in self.bodies.items() if not bc.static}
         self._coupled = sorted(n for n in names if not self._static(n))
+        self._index = {name: k for k, name in enumerate(self._coupled)}
         self._inertial = sorted({a.body for a in self.attachments if a.coupling == "inertial"})
+        self._kinematic_drivers()
 
     def attach(self, rod: Rod, end: str | int = "start", body: str = "world",
                offset: Sequence[float] = (0.0, 0.0, 0.0), frame: bool = True,
@@ -275,78 +288,102 @@ class CoSimulation:
         return list(bc.colliders)
 
     # ------------------------------------------------------------------ stepping
-    def _drive(self, motions: dict[str, BodyMotion]) -> None:
+    def _kinematic_drivers(self) -> None:
+        """The drivers that follow moving bodies (kinematic clamps, colliders), as arrays:
+        each one's body (index into ``_coupled``) and its frame in the body's frame."""
+        where = {name: k for k, name in enumerate(self._coupled)}
+        drivers, body, off, rot = [], [], [], []
         for a in self.attachments:
-            m = motions.get(a.body)
-            c = a.clamp
-            if m is None:  # static body: the clamp stays where it is
-                c.reset_impulse()
-                continue
-            if a.coupling == "inertial":
-                self._ride(a, m)
-                if c is None:
-                    continue
-            c.set_pose(position=m.position, rotation=m.rotation)
-            c.set_velocity(m.velocity, m.angular_velocity)
-            c.set_acceleration(m.acceleration, m.angular_acceleration)
-            c.reset_impulse()
+            if a.clamp is not None and a.body in where:
+                drivers.append(a.clamp)  # rebased: its frame is the body's
+                body.append(where[a.body])
+                off.append(np.zeros(3))
+                rot.append(np.eye(3))
         for name, bc in self.bodies.items():
-            m = motions.get(name)
-            if m is None:
-                continue
-            for c, g in zip(bc.colliders, bc.geoms):
-                r = m.rotation @ g.position
-                v, a = point_motion(m, r)
-                c.set_pose(position=m.position + r, rotation=m.rotation @ g.rotation)
-                c.set_velocity(v, m.angular_velocity)
-                c.set_acceleration(a, m.angular_acceleration)
-                c.reset_impulse()
+            if name in where:
+                for c, g in zip(bc.colliders, bc.geoms):
+                    drivers.append(c)
+                    body.append(where[name])
+                    off.append(g.position)
+                    rot.append(g.rotation)
+        self._drivers = drivers
+        self._drv_index = self.world.driver_table.index(drivers)
+        self._origin = np.zeros((len(drivers), 3))
+        self._drv_body = np.array(body, dtype=np.int64)
+        self._drv_off = np.array(off, dtype=np.float64).reshape(-1, 3)
+        self._drv_rot = np.array(rot, dtype=np.float64).reshape(-1, 3, 3)
 
-    def _ride(self, a: Attachment, m: BodyMotion) -> None:
+    def _drive(self, m: np.ndarray) -> None:
+        """Every kinematic driver takes its body's motion (rigid-body kinematics of its frame)."""
+        for a in self.attachments:
+            if a.coupling == "inertial" and a.body in self._index:
+                self._ride(a, m[self._index[a.body]])
+        if not self._drivers:
+            return
+        table = self.world.driver_table
+        drive_rows(table.rows, self._drv_index, self._drv_body, self._drv_off, self._drv_rot, m,
+                   self._origin)
+        table.reset_impulses(self._drv_index)
+
+    def _ride(self, a: Attachment, m: np.ndarray) -> None:
         """An inertial attachment before the rods' step: the node starts where the body's
         point is, with its velocity, and carries the body's mass and the body's other loads
         (its free acceleration, from the backend with no rod wrench, less gravity, which the
         node's mass already feels)."""
-        r = m.rotation @ a.offset
-        v, acc = point_motion(m, r)
-        a.rod.positions[a.node] = m.position + r
+        R = m[M_R:M_R + 9].reshape(3, 3)
+        w, al = m[M_W:M_W + 3], m[M_AL:M_AL + 3]
+        r = R @ a.offset
+        wr = _cross(w, r)
+        v = m[M_V:M_V + 3] + wr
+        acc = m[M_A:M_A + 3] + _cross(al, r) + _cross(w, wr)
+        a.rod.positions[a.node] = m[M_P:M_P + 3] + r
         a.rod.velocities[a.node] = v
-        a._v0, a._a0 = v, acc
+        a._v0, a._a0, a._r = v, acc, r
         a._force = a.mass * (acc - self.world.gravity)
         a.rod.external_forces[a.node] += a._force
 
-    def _feed_back(self, motions: dict[str, BodyMotion]) -> None:
+    def _feed_back(self, m: np.ndarray) -> None:
+        """Mean wrench of the macro step on every coupled body, torque about its COM."""
         T = self.dt
+        n = len(self._coupled)
+        if n == 0:
+            return
+        wrench = np.zeros((n, 6))
+        com = m[:, M_COM:M_COM + 3]
+        if self._drivers:
+            table = self.world.driver_table
+            wrenches_from_impulses(table.impulses(self._drv_index), self._drv_body,
+                                   self._origin, com, 1.0 / T, wrench)
         for a in self.attachments:
-            if a.coupling == "inertial" and a.body in motions:
-                a.rod.external_forces[a.node] -= a._force
-        for name in self._coupled:
-            m = motions[name]
-            F = np.zeros(3)
-            tau = np.zeros(3)
-            # each driver's torque is about its origin at the step's start; move it to the COM
-            for a in self.attachments:
-                if a.body != name:
-                    continue
-                if a.coupling == "inertial":
-                    # the force that gives the body the node's velocity change in its step
-                    f = a.mass * ((a.rod.velocities[a.node] - a._v0) / T - a._a0) * T
-                    F += f
-                    tau += _cross(m.position + m.rotation @ a.offset - m.com, f)
-                if a.clamp is not None:
-                    imp = a.clamp.impulse
-                    F += imp[:3]
-                    tau += imp[3:] + _cross(m.position - m.com, imp[:3])
-            bc = self.bodies.get(name)
-            if bc is not None:
-                for c, g in zip(bc.colliders, bc.geoms):
-                    imp = c.impulse
-                    origin = m.position + m.rotation @ g.position
-                    F += imp[:3]
-                    tau += imp[3:] + _cross(origin - m.com, imp[:3])
-            wrench = np.concatenate([F, tau]) / T
-            self._wrench[name] = wrench
-            self.backend.apply_wrench(name, wrench[:3], wrench[3:])
+            k = self._index.get(a.body)
+            if a.coupling != "inertial" or k is None:
+                continue
+            a.rod.external_forces[a.node] -= a._force
+            # the force that gives the body the node's velocity change in its step
+            f = a.mass * ((a.rod.velocities[a.node] - a._v0) / T - a._a0)
+            wrench[k, :3] += f
+            wrench[k, 3:] += _cross(m[k, M_P:M_P + 3] + a._r - com[k], f)
+        self._wrenches = wrench
+        batch = getattr(self.backend, "apply_wrenches", None)
+        if batch is not None:
+            batch(self._coupled, wrench)
+        else:
+            for k, name in enumerate(self._coupled):
+                self.backend.apply_wrench(name, wrench[k, :3], wrench[k, 3:])
+
+    def _motions(self) -> np.ndarray:
+        """The coupled bodies' motions, one row each (``kernels.M_*`` columns)."""
+        rows = getattr(self.backend, "motion_rows", None)
+        if rows is not None:
+            return rows(self._coupled)
+        out = np.empty((len(self._coupled), M_COLS))
+        for k, name in enumerate(self._coupled):
+            x = self.backend.motion(name)
+            out[k, M_P:M_P + 3], out[k, M_R:M_R + 9] = x.position, np.ravel(x.rotation)
+            out[k, M_V:M_V + 3], out[k, M_W:M_W + 3] = x.velocity, x.angular_velocity
+            out[k, M_A:M_A + 3] = x.acceleration
+            out[k, M_AL:M_AL + 3], out[k, M_COM:M_COM + 3] = x.angular_acceleration, x.com
+        return out
 
     def step(self) -> None:
         """One macro step of Algorithm 1 (see the module docstring)."""
@@ -359,7 +396,7 @@ class CoSimulation:
         be.begin()
         if clock:
             t1 = clock()
-        motions = {name: be.motion(name) for name in self._coupled}
+        motions = self._motions()
         self._drive(motions)
         if clock:
             t2 = clock()
@@ -424,7 +461,10 @@ class CoSimulation:
         """The last macro step's mean force (N) and torque (N m, about the body's centre of
         mass) the rods put on ``body``, world frame (6)."""
         self._check_body(body)
-        return self._wrench.get(body, np.zeros(6)).copy()
+        k = self._index.get(body)
+        if k is None or k >= self._wrenches.shape[0]:
+            return np.zeros(6)
+        return self._wrenches[k].copy()
 
     def __repr__(self) -> str:
         return (f"CoSimulation(rods={len(self.world.rods)}, attachments={len(self.attachments)}, "

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from .backend import BodyMotion, Geom
+from .kernels import M_COLS, body_motions
 
 try:
     import mujoco
@@ -64,14 +65,23 @@ class MujocoBackend:
 
     ``model``: an MJCF string, a path to an MJCF file, or a ``mujoco.MjModel``. ``.model``,
     ``.data`` are MuJoCo's own objects (set controls on ``data.ctrl`` as usual); ``.dt`` is
-    ``model.opt.timestep``.
+    ``model.opt.timestep``. ``keyframe`` (name or index): start from that keyframe (e.g.
+    ``"home"`` of :func:`deformx.robots.ur5e`) instead of the model's reference pose.
     """
 
-    def __init__(self, model: Any) -> None:
+    def __init__(self, model: Any, keyframe: str | int | None = None) -> None:
         self.model = load_model(model)
         self.data = mujoco.MjData(self.model)
+        if keyframe is not None:
+            k = keyframe if isinstance(keyframe, int) else mujoco.mj_name2id(
+                self.model, mujoco.mjtObj.mjOBJ_KEY, keyframe)
+            if not isinstance(k, int) or not 0 <= k < self.model.nkey:
+                raise ValueError(f"keyframe: no keyframe {keyframe!r} in the model "
+                                 f"({self.model.nkey} keyframes)")
+            mujoco.mj_resetDataKeyframe(self.model, self.data, k)
         mujoco.mj_forward(self.model, self.data)
         self._ids: dict[str, int] = {}
+        self._id_arrays: dict[tuple, np.ndarray] = {}
         self._res = np.zeros(6)
 
     @property
@@ -140,6 +150,25 @@ class MujocoBackend:
                           velocity=v, angular_velocity=w, acceleration=a,
                           angular_acceleration=alpha, com=d.xipos[i].copy())
 
+    def motion_rows(self, names: list[str]) -> np.ndarray:
+        """:meth:`motion` of many bodies, one row each (``deformx.cosim.kernels.M_*``
+        columns), computed for all at once from MuJoCo's com-based velocities and
+        accelerations as ``mj_objectVelocity`` / ``mj_objectAcceleration`` do."""
+        m, d = self.model, self.data
+        ids = self._id_array(names)
+        out = np.empty((ids.shape[0], M_COLS))
+        body_motions(ids, m.body_rootid, d.xpos, d.xmat, d.subtree_com, d.cvel, d.cacc,
+                     d.xipos, m.opt.gravity, out)
+        return out
+
+    def _id_array(self, names: list[str]) -> np.ndarray:
+        key = tuple(names)
+        ids = self._id_arrays.get(key)
+        if ids is None:
+            ids = self._id_arrays[key] = np.array([self.body_id(n) for n in names],
+                                                   dtype=np.int64)
+        return ids
+
     def geoms(self, name: str) -> list[Geom]:
         m, i = self.model, self.body_id(name)
         out = []
@@ -172,6 +201,10 @@ class MujocoBackend:
         i = self.body_id(name)
         self.data.xfrc_applied[i, :3] = force
         self.data.xfrc_applied[i, 3:] = torque
+
+    def apply_wrenches(self, names: list[str], wrenches: np.ndarray) -> None:
+        """:meth:`apply_wrench` for many bodies: ``wrenches`` (n, 6) force then torque."""
+        self.data.xfrc_applied[self._id_array(names)] = wrenches
 
     def step(self) -> None:
         mujoco.mj_step(self.model, self.data)

@@ -21,6 +21,9 @@ import numpy as np
 
 from . import validation as check
 from .kernels.bundles import D_A, D_AL, D_COLS, D_P, D_R, D_V, D_W
+from .kernels.drivers import clear_impulses, gather_impulses
+
+_NO_IMPULSES = np.zeros((0, 0, 6))
 
 
 def fresh_row() -> np.ndarray:
@@ -109,6 +112,19 @@ class DriverTable:
         if self.env is not None and self.env["dimp"].shape[1] > d:
             self.env["dimp"][:, d] = 0.0
 
+    def impulses(self, index: np.ndarray) -> np.ndarray:
+        """:meth:`impulse` of many drivers at once (n, 6); ``index`` from :meth:`index`."""
+        out = np.empty((index.shape[0], 6))
+        gather_impulses(self.impulse_base, self._dimp(), index, out)
+        return out
+
+    def reset_impulses(self, index: np.ndarray) -> None:
+        """:meth:`reset_impulse` of many drivers at once."""
+        clear_impulses(self.impulse_base, self._dimp(), index)
+
+    def _dimp(self) -> np.ndarray:
+        return _NO_IMPULSES if self.env is None else self.env["dimp"]
+
     def rebind(self, env) -> None:
         """Use a rebuilt ``env`` group, keeping the impulses accumulated in the old one."""
         if self.env is not None:
@@ -116,12 +132,17 @@ class DriverTable:
             self.impulse_base[: dimp.shape[1]] += dimp.sum(axis=0)
         self.env = env
 
-    def set_many(self, handles: Sequence["Driver"], **values: Any) -> None:
-        """Array form of the setters: each value has one row per handle (see
-        ``World.set_drivers``)."""
-        index = np.array([h._driver for h in handles], dtype=np.int64)
+    def index(self, handles: Sequence["Driver"]) -> np.ndarray:
+        """The rows of ``handles`` (each must belong to this table)."""
         if any(h._table is not self for h in handles):
             raise ValueError("drivers: every driver must belong to this world")
+        return np.array([h._driver for h in handles], dtype=np.int64)
+
+    def set_many(self, handles: Sequence["Driver"], validate: bool = True,
+                 **values: Any) -> None:
+        """Array form of the setters: each value has one row per handle (see
+        ``World.set_drivers``)."""
+        index = self.index(handles)
         n = index.shape[0]
         for name, col0, width in (("position", D_P, 3), ("rotation", D_R, 9),
                                   ("velocity", D_V, 3), ("angular_velocity", D_W, 3),
@@ -130,6 +151,9 @@ class DriverTable:
             if value is None:
                 continue
             arr = np.asarray(value, dtype=np.float64).reshape(n, -1)
+            if not validate:
+                self.rows[index, col0:col0 + width] = arr
+                continue
             if arr.shape != (n, width) or not np.all(np.isfinite(arr)):
                 raise ValueError(f"{name} must be finite with shape ({n}, "
                                  f"{'3, 3' if width == 9 else 3}), got {np.shape(value)}")

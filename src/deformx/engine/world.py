@@ -297,16 +297,31 @@ class World:
                     rotation: np.ndarray | None = None, velocity: np.ndarray | None = None,
                     angular_velocity: np.ndarray | None = None,
                     acceleration: np.ndarray | None = None,
-                    angular_acceleration: np.ndarray | None = None) -> None:
+                    angular_acceleration: np.ndarray | None = None,
+                    validate: bool = True) -> None:
         """Set many drivers at once (array form of their setters): each given array has one
-        row per driver, (n, 3) or (n, 3, 3) for ``rotation`` (world from local), world frame."""
-        self._drivers.set_many(drivers, position=position, rotation=rotation, velocity=velocity,
-                               angular_velocity=angular_velocity, acceleration=acceleration,
+        row per driver, (n, 3) or (n, 3, 3) for ``rotation`` (world from local), world frame.
+        ``validate=False`` skips the shape, finiteness and rotation checks (values from
+        another simulator's state, set every control step)."""
+        self._drivers.set_many(drivers, validate=validate, position=position, rotation=rotation,
+                               velocity=velocity, angular_velocity=angular_velocity,
+                               acceleration=acceleration,
                                angular_acceleration=angular_acceleration)
+
+    @property
+    def driver_table(self) -> DriverTable:
+        """Every driver of the world as one table (rows ``D_*`` columns of
+        ``kernels/bundles.py``; ``index(handles)``, ``impulses(index)``,
+        ``reset_impulses(index)``): the array form a co-simulation writes once per step."""
+        return self._drivers
 
     def driver_impulses(self, drivers: Sequence[Driver]) -> np.ndarray:
         """Impulses (n, 6) of many drivers since their last reset (see ``Driver.impulse``)."""
-        return np.array([d.impulse for d in drivers]).reshape(-1, 6)
+        return self._drivers.impulses(self._drivers.index(drivers))
+
+    def reset_driver_impulses(self, drivers: Sequence[Driver]) -> None:
+        """``reset_impulse()`` of many drivers at once."""
+        self._drivers.reset_impulses(self._drivers.index(drivers))
 
     # ------------------------------------------------------------------ preparing
     def _rod_parameters_changed(self) -> None:

@@ -286,3 +286,29 @@ def collider_impulses(r, h, cols, env) -> None:
         for j in range(6):
             env.dreact[r, d, j] = cols.wrench[r, c, j]
             env.dimp[r, d, j] += h * cols.wrench[r, c, j]
+
+
+@njit(cache=True, error_model="numpy")
+def gather_impulses(base, dimp, index, out) -> None:
+    """``out[k] = base[d] + sum over rods of dimp[:, d]`` for ``d = index[k]`` (the array form
+    of ``Driver.impulse``; numpy's fancy indexing costs ~10 us a call here)."""
+    for k in range(index.shape[0]):
+        d = index[k]
+        for j in range(6):
+            v = base[d, j]
+            if d < dimp.shape[1]:
+                for r in range(dimp.shape[0]):
+                    v += dimp[r, d, j]
+            out[k, j] = v
+
+
+@njit(cache=True, error_model="numpy")
+def clear_impulses(base, dimp, index) -> None:
+    """Zero the impulses of drivers ``index`` (the array form of ``reset_impulse``)."""
+    for k in range(index.shape[0]):
+        d = index[k]
+        for j in range(6):
+            base[d, j] = 0.0
+            if d < dimp.shape[1]:
+                for r in range(dimp.shape[0]):
+                    dimp[r, d, j] = 0.0
