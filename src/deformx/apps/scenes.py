@@ -52,6 +52,9 @@ __all__ = [
     "Plane",
     "Collider",
     "Output",
+    "Attach",
+    "JointWave",
+    "CoSim",
     "Scene",
     "SceneResult",
     "load_scene",
@@ -227,6 +230,42 @@ class Collider(_Model):
         return self
 
 
+class Attach(_Model):
+    """A rod end held by a MuJoCo body (see ``CoSimulation.attach``)."""
+
+    rod: Annotated[int, Field(ge=0)] = Field(0, description="index into rods")
+    end: Union[Literal["start", "end"], int] = "start"
+    body: str = Field(..., description="MuJoCo body name")
+    offset: FiniteVec3 = Field((0.0, 0.0, 0.0), description="m, in the body's frame")
+    frame: bool = True
+    coupling: Literal["auto", "kinematic", "inertial"] = "auto"
+
+
+class JointWave(_Model):
+    """A position servo's target: ``mean + amplitude sin(2 pi frequency t + phase)``."""
+
+    actuator: str = Field(..., description="MuJoCo actuator name")
+    mean: FiniteFloat | None = Field(None, description="rad or m; default: the start value")
+    amplitude: FiniteFloat = 0.0
+    frequency: NonNegativeFloat = Field(0.0, description="Hz")
+    phase: FiniteFloat = Field(0.0, description="rad")
+
+
+class CoSim(_Model):
+    """Co-simulation with MuJoCo: the bodies of an MJCF file, rods attached to them, bodies
+    whose geoms the rods collide with (their reactions go back to the bodies)."""
+
+    mjcf: str = Field(..., description="MJCF file, relative to the scene file")
+    keyframe: str | None = Field(None, description="start from this keyframe of the MJCF")
+    substeps: Annotated[int, Field(ge=1)] | None = Field(
+        None, description="rod steps per MuJoCo step; default: MuJoCo's timestep / dt")
+    attach: list[Attach] = Field(default_factory=list)
+    colliders: list[str] = Field(default_factory=list,
+                                 description="bodies whose geoms become rod colliders "
+                                             "('world': the static geoms)")
+    controls: list[JointWave] = Field(default_factory=list)
+
+
 class Output(_Model):
     directory: str = Field("deformx-output", description="where files are written")
     name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")] = Field(
@@ -252,6 +291,7 @@ class Scene(_Model):
     colliders: list[Collider] = Field(default_factory=list)
     rod_contact: bool = Field(True, description="contact between rods and of a rod with itself")
     rod_friction: NonNegativeFloat = Field(0.2, description="Coulomb coefficient of rod contact")
+    cosim: CoSim | None = Field(None, description="co-simulate with the bodies of an MJCF file")
     output: Output = Field(default_factory=Output)
     _base_dir: Path | None = PrivateAttr(None)
 
@@ -440,11 +480,71 @@ def _add_collider(world, c: Collider, base_dir: Path | None) -> None:
         world.add_cylinder(c.radius, c.length, pose=pose, **contact)
 
 
+def build_cosim(scene: Scene, world, rods, base_dir: str | Path | None = None):
+    """The co-simulation of a scene with a ``cosim`` section: ``(sim, drive)``, where
+    ``drive(sim)`` sets the servo targets for the coming step (None without controls)."""
+    from ..cosim import CoSimulation, MujocoBackend
+
+    c = scene.cosim
+    base_dir = Path(base_dir) if base_dir is not None else scene._base_dir
+    path = Path(c.mjcf)
+    if not path.is_absolute() and base_dir is not None:
+        path = base_dir / path
+    try:
+        backend = MujocoBackend(str(path), keyframe=c.keyframe)
+    except ValueError as err:
+        raise _rewrap("cosim.mjcf" if "keyframe" not in str(err) else "cosim.keyframe",
+                      err) from err
+    except Exception as err:  # MuJoCo's own parse errors
+        raise ValueError(f"cosim.mjcf: {err}") from err
+    try:
+        sim = CoSimulation(world, backend, substeps=c.substeps)
+    except ValueError as err:
+        raise _rewrap("cosim.substeps", err) from err
+    for j, body in enumerate(c.colliders):
+        try:
+            sim.add_colliders(body)
+        except ValueError as err:
+            raise _rewrap(f"cosim.colliders[{j}]", err) from err
+    for j, a in enumerate(c.attach):
+        try:
+            if a.rod >= len(rods):
+                raise ValueError(f"rod: index {a.rod} out of range (the scene has {len(rods)} rods)")
+            sim.attach(rods[a.rod], end=a.end, body=a.body, offset=a.offset, frame=a.frame,
+                       coupling=a.coupling)
+        except ValueError as err:
+            raise _rewrap(f"cosim.attach[{j}]", err) from err
+    if not c.controls:
+        return sim, None
+    import mujoco
+
+    m, d = backend.model, backend.data
+    waves = []
+    for j, w in enumerate(c.controls):
+        k = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, w.actuator)
+        if k < 0:
+            names = [m.actuator(i).name for i in range(m.nu)]
+            raise ValueError(f"cosim.controls[{j}].actuator: no actuator {w.actuator!r} "
+                             f"(actuators: {', '.join(names)})")
+        mean = float(d.ctrl[k]) if w.mean is None else w.mean
+        waves.append((k, mean, w.amplitude, 2.0 * math.pi * w.frequency, w.phase))
+
+    def drive(sim) -> None:
+        t = sim.time + sim.dt
+        for k, mean, amp, omega, phase in waves:
+            d.ctrl[k] = mean + amp * math.sin(omega * t + phase)
+
+    return sim, drive
+
+
 def warm_up_engine(scene: "Scene") -> None:
     """Compile (first run) or load from numba's cache (later runs) the kernels that ``scene``
     uses, by stepping a throwaway copy of its world once, so that timings exclude it."""
-    world, _ = build_world(scene)
-    world.step(1)
+    world, rods = build_world(scene)
+    if scene.cosim is not None:
+        build_cosim(scene, world, rods)[0].step()
+    else:
+        world.step(1)
 
 
 class SceneResult(dict):
@@ -480,7 +580,14 @@ def run_scene(scene: Scene, progress: bool = True, out_dir: str | Path | None = 
     compile_time = _time.perf_counter() - t0
     recorder = dx.Recorder(world, every=scene.output.record_every)
     t0 = _time.perf_counter()
-    world.run(scene.duration, progress=progress, recorder=recorder)
+    if scene.cosim is None:
+        world.run(scene.duration, progress=progress, recorder=recorder)
+    else:
+        sim, drive = build_cosim(scene, world, rods)
+        if drive is not None:
+            drive.every = sim.dt  # a callback each macro step: the servo targets
+        sim.run(scene.duration, progress=progress,
+                callbacks=[recorder] + ([drive] if drive is not None else []))
     wall = _time.perf_counter() - t0
     # Always keep the final state (the recorder samples on its own grid, which the duration
     # need not be a multiple of).
