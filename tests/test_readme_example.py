@@ -22,3 +22,15 @@ def test_readme_drivers_example_runs():
     section = text[text.index("Clamps and colliders are kinematic drivers"):]
     code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
     exec(compile("import deformx as dx\n" + code, "README.md", "exec"), {})
+
+
+def test_readme_cosim_example_runs():
+    text = README.read_text()
+    section = text[text.index("## Co-simulation with robots (MuJoCo)"):]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    scope: dict = {}
+    exec(compile("import deformx as dx\n" + code, "README.md", "exec"), scope)
+    sim, rope = scope["sim"], scope["rope"]
+    assert abs(sim.time - 1.0) < 1e-9
+    # the tool carries the hanging rope's weight (its wrench points down)
+    assert sim.wrench("tool_tip")[2] < -0.5 * rope.mass * 9.81

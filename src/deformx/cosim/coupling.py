@@ -48,6 +48,8 @@ class Attachment:
     _v0: np.ndarray = field(default_factory=lambda: np.zeros(3))     # node velocity at start
     _a0: np.ndarray = field(default_factory=lambda: np.zeros(3))     # body point's free acc.
     _r: np.ndarray = field(default_factory=lambda: np.zeros(3))      # node from body origin
+    _p0: np.ndarray = field(default_factory=lambda: np.zeros(3))     # body point at start
+    _slack: float = 0.0  # m: node-body drift that puts the node back on the body
 
 
 @dataclass
@@ -143,7 +145,11 @@ class CoSimulation:
     def _refresh_coupled(self) -> None:
         names = {a.body for a in self.attachments}
         names |= {b for b, bc in self.bodies.items() if not bc.static}
-        self._coupled = sorted(n for n in names if not self._static(n))
+        coupled = sorted(n for n in names if not self._static(n))
+        for gone in set(self._coupled) - set(coupled):  # its last wrench must not stay applied
+            self.backend.apply_wrench(gone, np.zeros(3), np.zeros(3))
+        self._coupled = coupled
+        self._wrenches = np.zeros((len(coupled), 6))
         self._index = {name: k for k, name in enumerate(self._coupled)}
         self._inertial = sorted({a.body for a in self.attachments if a.coupling == "inertial"})
         self._kinematic_drivers()
@@ -207,6 +213,7 @@ class CoSimulation:
         att = Attachment(rod=rod, node=node, body=body, clamp=clamp, offset=off,
                          coupling=coupling, mass=0.0 if free is None else free)
         if coupling == "inertial":
+            att._slack = 0.25 * float(rod.rest_lengths.min())
             rod.set_point_mass(node, att.mass)
             rod.velocities[node] = point_motion(m, m.rotation @ off)[0]
         self.attachments.append(att)
@@ -217,7 +224,8 @@ class CoSimulation:
 
     def detach(self, what: Rod | Attachment, end: str | int | None = None) -> None:
         """Release an attachment (or every attachment of a rod, or of its ``end``): the
-        rod end is free from the next step on and touches that body's colliders again."""
+        rod end is free from the next step on and touches that body's colliders again; a
+        body that holds and touches no rod any more gets no wrench from the next step on."""
         if isinstance(what, Attachment):
             chosen = [what]
         else:
@@ -233,7 +241,6 @@ class CoSimulation:
                 a.clamp.release()
             if a.coupling == "inertial":
                 a.rod.set_point_mass(a.node, 0.0)
-                self.backend.apply_wrench(a.body, np.zeros(3), np.zeros(3))
             if a.body in self.bodies and not any(
                     b.rod is a.rod and b.body == a.body for b in self.attachments):
                 a.rod.unignore(*self.bodies[a.body].colliders)
@@ -326,19 +333,22 @@ class CoSimulation:
         table.reset_impulses(self._drv_index)
 
     def _ride(self, a: Attachment, m: np.ndarray) -> None:
-        """An inertial attachment before the rods' step: the node starts where the body's
-        point is, with its velocity, and carries the body's mass and the body's other loads
-        (its free acceleration, from the backend with no rod wrench, less gravity, which the
-        node's mass already feels)."""
+        """An inertial attachment before the rods' step: the node carries the body's mass and
+        the body's other loads (its free acceleration, read from the backend with no rod
+        wrench, less gravity, which the node's mass already feels). The node's own state is
+        the truth (the body follows it); it is put back on the body's point only when the two
+        drifted apart by more than a quarter element (the body blocked by its own contacts)."""
         R = m[M_R:M_R + 9].reshape(3, 3)
         w, al = m[M_W:M_W + 3], m[M_AL:M_AL + 3]
         r = R @ a.offset
         wr = _cross(w, r)
+        p = m[M_P:M_P + 3] + r
         v = m[M_V:M_V + 3] + wr
         acc = m[M_A:M_A + 3] + _cross(al, r) + _cross(w, wr)
-        a.rod.positions[a.node] = m[M_P:M_P + 3] + r
-        a.rod.velocities[a.node] = v
-        a._v0, a._a0, a._r = v, acc, r
+        if np.linalg.norm(a.rod.positions[a.node] - p) > a._slack:
+            a.rod.positions[a.node] = p
+            a.rod.velocities[a.node] = v
+        a._p0, a._v0, a._a0, a._r = p, v, acc, r
         a._force = a.mass * (acc - self.world.gravity)
         a.rod.external_forces[a.node] += a._force
 
@@ -359,8 +369,9 @@ class CoSimulation:
             if a.coupling != "inertial" or k is None:
                 continue
             a.rod.external_forces[a.node] -= a._force
-            # the force that gives the body the node's velocity change in its step
-            f = a.mass * ((a.rod.velocities[a.node] - a._v0) / T - a._a0)
+            # the force that brings the body's point to the node in the body's Euler step
+            # (p1 = p0 + T v1): with one implicit rod step, the node's velocity as well
+            f = a.mass * (((a.rod.positions[a.node] - a._p0) / T - a._v0) / T - a._a0)
             wrench[k, :3] += f
             wrench[k, 3:] += _cross(m[k, M_P:M_P + 3] + a._r - com[k], f)
         self._wrenches = wrench
