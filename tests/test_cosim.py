@@ -271,3 +271,21 @@ def test_attached_frame_turns_with_the_body_and_detach_lets_go():
     sim.run(0.1)
     assert backend.data.qvel[0] == pytest.approx(spin, rel=1e-12)  # the hub spins freely
     assert np.all(sim.wrench("hub") == 0.0)
+
+
+def test_a_held_rope_ignores_the_holding_body_and_bodies_welded_to_it():
+    from deformx import robots
+
+    backend = cosim.MujocoBackend(robots.ur5e(tool_length=0.3))
+    world = dx.World(dt=2e-3, integrator="stable")
+    tip = backend.motion("tool_tip").position
+    rod = world.add_rod(_rope(tip, (0, 0, -1), length=0.2, n=8))
+    sim = cosim.CoSimulation(world, backend)
+    stick = sim.add_colliders("flange")  # the stick's capsule: welded to tool_tip
+    wrist = sim.add_colliders("wrist_2_link")  # across the wrist_3 joint: not welded
+    att = sim.attach(rod, "start", body="tool_tip")
+    ignored = {c for (r, c) in world._ignored}  # (rod, collider) indices
+    assert stick and {c.index for c in stick} <= ignored
+    assert not ({c.index for c in wrist} & ignored)
+    sim.detach(att)
+    assert not world._ignored

@@ -115,6 +115,7 @@ class CoSimulation:
         self._coupled: list[str] = []  # moving bodies with attachments or colliders
         self._index: dict[str, int] = {}
         self._drivers: list = []
+        self._ignores: dict = {}  # (rod, collider) pairs this co-simulation made ignore
         self._inertial: list[str] = []  # bodies riding on rod nodes
         self._steps = 0
         self.profile = False  # when True, step() adds its phases' seconds to `timings`
@@ -153,6 +154,25 @@ class CoSimulation:
         self._index = {name: k for k, name in enumerate(self._coupled)}
         self._inertial = sorted({a.body for a in self.attachments if a.coupling == "inertial"})
         self._kinematic_drivers()
+        self._update_ignores()
+
+    def _update_ignores(self) -> None:
+        """A held rod ignores the colliders of the body holding it and of the bodies welded
+        to that body (a gripper's fingers, the stick whose tip holds the rope)."""
+        want = {}
+        for a in self.attachments:
+            welded = getattr(self.backend, "welded", None)
+            group = [a.body] if welded is None or self._static(a.body) else welded(a.body)
+            for b in group:
+                for c in self.bodies.get(b, BodyColliders(b, True)).colliders:
+                    want[(id(a.rod), id(c))] = (a.rod, c)
+        for key, (rod, c) in self._ignores.items():
+            if key not in want:
+                rod.unignore(c)
+        for key, (rod, c) in want.items():
+            if key not in self._ignores:
+                rod.ignore(c)
+        self._ignores = want
 
     def attach(self, rod: Rod, end: str | int = "start", body: str = "world",
                offset: Sequence[float] = (0.0, 0.0, 0.0), frame: bool = True,
@@ -217,8 +237,6 @@ class CoSimulation:
             rod.set_point_mass(node, att.mass)
             rod.velocities[node] = point_motion(m, m.rotation @ off)[0]
         self.attachments.append(att)
-        if body in self.bodies:
-            rod.ignore(*self.bodies[body].colliders)
         self._refresh_coupled()
         return att
 
@@ -241,9 +259,6 @@ class CoSimulation:
                 a.clamp.release()
             if a.coupling == "inertial":
                 a.rod.set_point_mass(a.node, 0.0)
-            if a.body in self.bodies and not any(
-                    b.rod is a.rod and b.body == a.body for b in self.attachments):
-                a.rod.unignore(*self.bodies[a.body].colliders)
         self._refresh_coupled()
 
     def add_colliders(self, body: str, stiffness: float | None = None,
@@ -288,9 +303,6 @@ class CoSimulation:
             bc.colliders.append(c)
             bc.geoms.append(g)
         self.bodies[body] = bc
-        for a in self.attachments:
-            if a.body == body and bc.colliders:
-                a.rod.ignore(*bc.colliders)
         self._refresh_coupled()
         return list(bc.colliders)
 

@@ -117,6 +117,12 @@ class MujocoBackend:
             i = int(m.body_parentid[i])
         return True
 
+    def welded(self, name: str) -> list[str]:
+        """The bodies rigidly attached to body ``name`` (MuJoCo's weld group), itself included."""
+        m = self.model
+        w = m.body_weldid[self.body_id(name)]
+        return [m.body(i).name for i in np.flatnonzero(m.body_weldid == w)]
+
     def mass(self, name: str) -> float:
         """The body's own mass (kg)."""
         return float(self.model.body_mass[self.body_id(name)])
