@@ -18,6 +18,8 @@ from typing import Sequence
 
 import numpy as np
 
+from ..engine.running import progress_bar
+
 
 @dataclass
 class Setup:
@@ -191,23 +193,14 @@ def run(rope: str = "cosserat", duration: float = 3.0, out: str | Path | None = 
         for i, p in enumerate(exp.markers()):
             rows.append((exp.time, i, *p))
 
-    bar = None
-    if progress:
-        from rich.progress import Progress
-        bar = Progress(transient=True)
-        bar.start()
-        task = bar.add_task(f"calibration experiment ({rope})", total=n)
-    try:
+    with progress_bar(f"calibration experiment ({rope})", n, progress) as update:
         record()
         for k in range(1, n + 1):
             exp.step()
             if k % k_every == 0:
                 record()
-            if bar is not None and k % 50 == 0:
-                bar.update(task, completed=k)
-    finally:
-        if bar is not None:
-            bar.stop()
+            if k % 50 == 0:
+                update(k)
     table = np.array(rows)
     if out is not None:
         write_csv(out, table)

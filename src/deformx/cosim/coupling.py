@@ -21,6 +21,7 @@ from ..engine import validation as check
 from ..engine.constraints import Clamp
 from ..engine.contact.colliders import Collider
 from ..engine.rod import Rod
+from ..engine.running import callback_periods, progress_bar
 from ..engine.world import World
 from .backend import Backend, BodyMotion, Geom
 from .kernels import (M_A, M_AL, M_COLS, M_COM, M_P, M_R, M_V, M_W, drive_rows,
@@ -453,20 +454,8 @@ class CoSimulation:
         duration = check.non_negative("duration", duration, "s")
         T = self.dt
         n_total = int(round(duration / T))
-        periods = []
-        for cb in callbacks:
-            if not callable(cb) or not hasattr(cb, "every"):
-                raise ValueError("callbacks must be callables with an `every` attribute (s), "
-                                 f"got {cb!r}")
-            periods.append(max(1, int(round(check.positive("callback.every", cb.every, "s")
-                                            / T))))
-        bar = None
-        if progress:
-            from rich.progress import Progress
-            bar = Progress(transient=True)
-            bar.start()
-            task = bar.add_task(f"co-simulating {duration:g} s", total=n_total)
-        try:
+        periods = callback_periods(callbacks, T)
+        with progress_bar(f"co-simulating {duration:g} s", n_total, progress) as update:
             for k in range(n_total + 1):
                 for cb, p in zip(callbacks, periods):
                     if k % p == 0:
@@ -474,11 +463,8 @@ class CoSimulation:
                 if k == n_total:
                     break
                 self.step()
-                if bar is not None and k % 50 == 0:
-                    bar.update(task, completed=k + 1)
-        finally:
-            if bar is not None:
-                bar.stop()
+                if k % 50 == 0:
+                    update(k + 1)
 
     def wrench(self, body: str) -> np.ndarray:
         """The last macro step's mean force (N) and torque (N m, about the body's centre of

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import warnings
-from typing import TYPE_CHECKING, Any, Sequence
+from contextlib import contextmanager
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 
 from . import validation as check
 
@@ -28,26 +29,14 @@ def run(world: "World", duration: float, progress: bool = False, recorder: Any =
         warnings.warn(f"run: duration {duration:g} s is shorter than half a step (dt = {dt:g} s); "
                       "nothing is simulated", stacklevel=3)
     cbs = list(callbacks) + ([recorder] if recorder is not None else [])
-    periods = []
-    for cb in cbs:
-        if not callable(cb) or not hasattr(cb, "every"):
-            raise ValueError("callbacks must be callables with an `every` attribute (s), got "
-                             f"{cb!r}")
-        every = check.positive("callback.every", cb.every, "s")
-        periods.append(max(1, int(round(every / dt))))
+    periods = callback_periods(cbs, dt)
     # Each callback's next firing, in steps from now; a recorder does not repeat the sample
     # it already holds of this instant.
     due = [0] * len(cbs)
     for k, cb in enumerate(cbs):
         if getattr(cb, "times", None) and abs(cb.times[-1] - world.time) < 0.5 * dt:
             due[k] = periods[k]
-    bar = None
-    if progress:
-        from rich.progress import Progress
-        bar = Progress(transient=True)
-        bar.start()
-        task = bar.add_task(f"simulating {duration:g} s", total=n_total)
-    try:
+    with progress_bar(f"simulating {duration:g} s", n_total, progress) as update:
         done = 0
         while True:
             for k, cb in enumerate(cbs):
@@ -60,8 +49,36 @@ def run(world: "World", duration: float, progress: bool = False, recorder: Any =
                 CHUNK, n_total - done)
             world.step(n)
             done += n
-            if bar is not None:
-                bar.update(task, completed=done)
+            update(done)
+
+
+def callback_periods(callbacks: Sequence[Any], dt: float) -> list[int]:
+    """Each callback's period in steps of ``dt`` (its ``every``, s, rounded; at least 1);
+    ``ValueError`` for anything that is not a callable with an ``every``."""
+    periods = []
+    for cb in callbacks:
+        if not callable(cb) or not hasattr(cb, "every"):
+            raise ValueError("callbacks must be callables with an `every` attribute (s), got "
+                             f"{cb!r}")
+        every = check.positive("callback.every", cb.every, "s")
+        periods.append(max(1, int(round(every / dt))))
+    return periods
+
+
+@contextmanager
+def progress_bar(description: str, total: int, enabled: bool = True
+                 ) -> Iterator[Callable[[int], None]]:
+    """A transient progress bar (rich) while the block runs; yields ``update(completed)``,
+    a no-op when not ``enabled``."""
+    if not enabled:
+        yield lambda completed: None
+        return
+    from rich.progress import Progress
+
+    bar = Progress(transient=True)
+    bar.start()
+    task = bar.add_task(description, total=total)
+    try:
+        yield lambda completed: bar.update(task, completed=completed)
     finally:
-        if bar is not None:
-            bar.stop()
+        bar.stop()
