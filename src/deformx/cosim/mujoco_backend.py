@@ -82,6 +82,7 @@ class MujocoBackend:
         mujoco.mj_forward(self.model, self.data)
         self._ids: dict[str, int] = {}
         self._id_arrays: dict[tuple, np.ndarray] = {}
+        self._fresh = False  # begin() ran and nothing moved since: step() may skip mj_step1
         self._res = np.zeros(6)
 
     @property
@@ -145,6 +146,7 @@ class MujocoBackend:
     def begin(self) -> None:
         mujoco.mj_forward(self.model, self.data)
         mujoco.mj_rnePostConstraint(self.model, self.data)
+        self._fresh = True
 
     def motion(self, name: str) -> BodyMotion:
         m, d, i, res = self.model, self.data, self.body_id(name), self._res
@@ -213,4 +215,11 @@ class MujocoBackend:
         self.data.xfrc_applied[self._id_array(names)] = wrenches
 
     def step(self) -> None:
-        mujoco.mj_step(self.model, self.data)
+        """``mj_step``; right after :meth:`begin` only its second half (``mj_step2``: forces,
+        accelerations and integration with the new wrenches and controls), since positions
+        and velocities have not changed since that forward pass."""
+        if self._fresh and self.model.opt.integrator != mujoco.mjtIntegrator.mjINT_RK4:
+            mujoco.mj_step2(self.model, self.data)
+        else:
+            mujoco.mj_step(self.model, self.data)
+        self._fresh = False
