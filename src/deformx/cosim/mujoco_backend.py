@@ -70,6 +70,8 @@ class MujocoBackend:
     """
 
     def __init__(self, model: Any, keyframe: str | int | None = None) -> None:
+        # what the model was made from (an MJCF string or path), for renderers that rebuild it
+        self.source = model if isinstance(model, (str, os.PathLike)) else None
         self.model = load_model(model)
         self.data = mujoco.MjData(self.model)
         if keyframe is not None:

@@ -206,6 +206,11 @@ class World:
         self._stale_env = True
         return len(self._planes) - 1
 
+    @property
+    def planes(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """The contact planes as (point, unit normal) pairs (m)."""
+        return tuple((p[:3].copy(), p[3:6].copy()) for p in self._planes)
+
     # ------------------------------------------------------------------ colliders
     def _add_collider(self, kind: str, pose: object, params: np.ndarray,
                       mesh: tuple[np.ndarray, np.ndarray] | None = None) -> col.Collider:

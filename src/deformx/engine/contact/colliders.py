@@ -220,6 +220,13 @@ class Collider(Driver):
     def faces(self) -> np.ndarray | None:
         return None if self._mesh is None else self._mesh[1]
 
+    @property
+    def size(self) -> np.ndarray:
+        """Shape sizes (m): sphere (radius,), box half extents (3), capsule and cylinder
+        (radius, half length along local z); empty for a mesh."""
+        n = {"sphere": 1, "box": 3, "capsule": 2, "cylinder": 2}.get(self.kind, 0)
+        return self._params[P_SHAPE:P_SHAPE + n].copy()
+
     def __repr__(self) -> str:
         extra = "" if self._mesh is None else f", {self._mesh[1].shape[0]} triangles"
         return f"Collider({self.kind}{extra}, position={self.position.round(4).tolist()})"
