@@ -165,3 +165,26 @@ def test_camera_checks_its_arguments():
         Camera(position=(0, 0, 1), look_at=(1, 0, 0), fov_y=180)
     K = Camera(position=(0, 0, 1), look_at=(1, 0, 0), fov_y=60).intrinsics
     assert Camera(position=(0, 0, 1), look_at=(1, 0, 0), K=K).fov_y == pytest.approx(60)
+
+
+def test_renders_a_cosimulation_with_an_id_per_mujoco_body():
+    from deformx import cosim, robots
+
+    xml = robots.ur5e(tool_length=0.3, floor=True, q0=(0.0, -1.2, 1.5, -1.87, -1.57, 0.0))
+    backend = cosim.MujocoBackend(xml, keyframe="home")
+    tip = backend.motion("tool_tip").position
+    world = dx.World(dt=backend.dt, integrator="stable")
+    rope = world.add_rod(dx.Rod.straight(n_elements=10, start=tip, direction=(0, 0, -1),
+                                         length=0.3, radius=0.008))
+    sim = cosim.CoSimulation(world, backend)
+    sim.add_colliders("world")
+    sim.attach(rope, "start", body="tool_tip")
+    for _ in range(5):
+        sim.step()
+    cam = Camera(position=(1.2, -1.2, 1.0), look_at=tuple(tip - [0, 0, 0.2]), width=160,
+                 height=120)
+    frame = FastRenderer(sim).render(cam)
+    kinds = {e["name"]: e["id"] for e in frame.ids}
+    assert frame.ids[0]["kind"] == "rod" and "plane" not in [e["kind"] for e in frame.ids]
+    seen = set(np.unique(frame.instances).tolist())
+    assert {1, kinds["world"], kinds["upper_arm_link"]} <= seen

@@ -61,6 +61,7 @@ class BodyColliders:
     static: bool
     colliders: list[Collider] = field(default_factory=list)
     geoms: list[Geom] = field(default_factory=list)
+    planes: list[int] = field(default_factory=list)  # indices of the world's planes
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -286,7 +287,7 @@ class CoSimulation:
                 if not static:
                     raise ValueError(f"add_colliders: plane geom {g.name!r} on the moving body "
                                      f"{body!r}; rods only collide with static planes")
-                w.add_plane(point=p, normal=R[:, 2], **kw)
+                bc.planes.append(w.add_plane(point=p, normal=R[:, 2], **kw))
                 continue
             pose = (p, R)
             if g.kind == "sphere":

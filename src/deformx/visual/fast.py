@@ -141,10 +141,12 @@ class FastRenderer:
                                     conaffinity=0)
             ids.append({"id": len(ids) + 1, "kind": "rod", "name": f"rod {i}"})
         # colliders standing for co-simulated bodies are drawn by MuJoCo's own geoms
-        from_bodies = set()
+        from_bodies, body_planes = set(), set()
         if sim is not None:
             for bc in sim.bodies.values():
                 from_bodies.update(id(c) for c in bc.colliders)
+                body_planes.update(bc.planes)
+        self._planes = [k for k in range(len(world.planes)) if k not in body_planes]
         self._colliders = [c for c in world.colliders if id(c) not in from_bodies]
         for k, c in enumerate(self._colliders):
             body = spec.worldbody.add_body(name=f"deformx_collider{k}", mocap=True)
@@ -166,7 +168,8 @@ class FastRenderer:
                               **kw)
             ids.append({"id": len(ids) + 1, "kind": "collider", "name": f"collider {c.index} "
                         f"({c.kind})"})
-        for k, (p, n) in enumerate(world.planes):
+        for k in self._planes:
+            p, n = world.planes[k]
             spec.worldbody.add_geom(name=f"deformx_plane{k}", type=mujoco.mjtGeom.mjGEOM_PLANE,
                                     size=[100.0, 100.0, 0.1], pos=list(p), quat=list(
                                         _quat(_frame_z(n))), material="deformx_ground",
@@ -219,8 +222,8 @@ class FastRenderer:
         for j in range(len(self._colliders)):
             out[m.geom(f"deformx_collider{j}").id] = k + 1 + j
         k += len(self._colliders)
-        for j in range(len(self.world.planes)):
-            out[m.geom(f"deformx_plane{j}").id] = k + 1 + j
+        for j, plane in enumerate(self._planes):
+            out[m.geom(f"deformx_plane{plane}").id] = k + 1 + j
         if sim is not None:  # one id per MuJoCo body with visible geoms ("world": static ones)
             nxt = len(ids) + 1
             for b in range(m.nbody):

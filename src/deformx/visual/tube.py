@@ -15,10 +15,12 @@ from numba import njit
 
 
 @njit(cache=True)
-def tube_vertices(pos, Q, radius, closed, sides, verts, normals) -> None:
+def tube_vertices(pos, Q, radius, closed, cos_t, sin_t, verts, normals) -> None:
     """Ring vertices and normals of a tube around nodes ``pos`` (N, 3) with element frames
-    ``Q`` (E, 3, 3), rows d1, d2, d3), node radii ``radius`` (N); ``verts`` / ``normals``
-    ((N sides + caps), 3) are written in place (caps: the two end centres, open rods)."""
+    ``Q`` (E, 3, 3), rows d1, d2, d3), node radii ``radius`` (N), ring angles given by their
+    ``cos_t`` / ``sin_t`` (sides); ``verts`` / ``normals`` ((N sides + caps), 3) are written in
+    place (caps: the two end centres, open rods)."""
+    sides = cos_t.shape[0]
     n = pos.shape[0]
     ne = Q.shape[0]
     for i in range(n):
@@ -41,8 +43,7 @@ def tube_vertices(pos, Q, radius, closed, sides, verts, normals) -> None:
         w0, w1, w2 = t1 * u2 - t2 * u1, t2 * u0 - t0 * u2, t0 * u1 - t1 * u0  # d2 = d3 x d1
         r = radius[i]
         for j in range(sides):
-            ang = 2.0 * np.pi * j / sides
-            c, s = np.cos(ang), np.sin(ang)
+            c, s = cos_t[j], sin_t[j]
             k = i * sides + j
             n0, n1, n2 = c * u0 + s * w0, c * u1 + s * w1, c * u2 + s * w2
             normals[k, 0], normals[k, 1], normals[k, 2] = n0, n1, n2
@@ -103,12 +104,14 @@ class Tube:
         if not self.closed:
             uv[-1, 0] = s[-1]
         self.uv = uv
+        angle = 2.0 * np.pi * np.arange(self.sides) / self.sides
+        self._cos, self._sin = np.cos(angle), np.sin(angle)
         self.update()
 
     def update(self, radius: np.ndarray | None = None) -> np.ndarray:
         """Refresh vertices and normals from the rod now (``radius`` per node overrides the
         rod's); returns the vertices."""
         tube_vertices(self.rod.positions, self.rod.directors,
-                      self.radius if radius is None else radius, self.closed, self.sides,
-                      self.vertices, self.normals)
+                      self.radius if radius is None else radius, self.closed, self._cos,
+                      self._sin, self.vertices, self.normals)
         return self.vertices
