@@ -55,6 +55,7 @@ __all__ = [
     "Attach",
     "JointWave",
     "CoSim",
+    "CameraSpec",
     "Scene",
     "SceneResult",
     "load_scene",
@@ -205,10 +206,13 @@ class Collider(_Model):
 
     ``kind``: mesh (``path`` to an OBJ/STL/PLY/GLB file, relative to the scene file), sphere
     (``radius``), box (``half_extents``), capsule or cylinder (``radius``, ``length`` along the
-    local z axis). ``position`` (m) and ``rotation`` (3x3, world from local) place it.
+    local z axis), blob (a procedural bunny-like closed mesh of about ``radius``, shape from
+    ``seed``, lowest point at its origin). ``position`` (m) and ``rotation`` (3x3, world from
+    local) place it.
     """
 
-    kind: Literal["mesh", "sphere", "box", "capsule", "cylinder"]
+    kind: Literal["mesh", "sphere", "box", "capsule", "cylinder", "blob"]
+    seed: Annotated[int, Field(ge=0)] = Field(0, description="shape of a blob")
     path: str | None = Field(None, description="mesh file (kind: mesh)")
     radius: PositiveFloat | None = Field(None, description="m (sphere, capsule, cylinder)")
     length: NonNegativeFloat | None = Field(None, description="m (capsule, cylinder)")
@@ -223,7 +227,8 @@ class Collider(_Model):
     @model_validator(mode="after")
     def _shape_fields(self):
         need = {"mesh": ("path",), "sphere": ("radius",), "box": ("half_extents",),
-                "capsule": ("radius", "length"), "cylinder": ("radius", "length")}[self.kind]
+                "capsule": ("radius", "length"), "cylinder": ("radius", "length"),
+                "blob": ("radius",)}[self.kind]
         for name in need:
             if getattr(self, name) is None:
                 raise ValueError(f"a {self.kind} needs '{name}'")
@@ -266,6 +271,17 @@ class CoSim(_Model):
     controls: list[JointWave] = Field(default_factory=list)
 
 
+class CameraSpec(_Model):
+    """A camera for rendered output (see ``deformx.visual.Camera``); fov_y in degrees."""
+
+    position: FiniteVec3
+    look_at: FiniteVec3 = (0.0, 0.0, 0.0)
+    up: FiniteVec3 = (0.0, 0.0, 1.0)
+    fov_y: Annotated[float, Field(gt=0.0, lt=180.0)] = 45.0
+    width: Annotated[int, Field(ge=16, le=4096)] = 640
+    height: Annotated[int, Field(ge=16, le=4096)] = 480
+
+
 class Output(_Model):
     directory: str = Field("deformx-output", description="where files are written")
     name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")] = Field(
@@ -273,6 +289,12 @@ class Output(_Model):
     record_every: PositiveFloat = Field(0.01, description="s between recorded frames")
     plot: bool = Field(True, description="write a PNG of side and top views")
     video: bool = Field(False, description="write an MP4 (needs imageio-ffmpeg)")
+    render: bool = Field(False, description="draw frames with the fast renderer (MuJoCo, "
+                                            "shadows): the MP4 and a contact sheet PNG from "
+                                            "them, and frames/ with the last frame's RGB, "
+                                            "depth, instance masks and camera.json")
+    camera: CameraSpec | None = Field(None, description="for render; default: looks at "
+                                                        "everything")
 
 
 class Scene(_Model):
@@ -476,6 +498,10 @@ def _add_collider(world, c: Collider, base_dir: Path | None) -> None:
         world.add_box(c.half_extents, pose=pose, **contact)
     elif c.kind == "capsule":
         world.add_capsule(c.radius, c.length, pose=pose, **contact)
+    elif c.kind == "blob":
+        from ..engine.geometry.shapes import blob_mesh
+
+        world.add_mesh(blob_mesh(radius=c.radius, seed=c.seed), pose=pose, **contact)
     else:
         world.add_cylinder(c.radius, c.length, pose=pose, **contact)
 
@@ -579,15 +605,19 @@ def run_scene(scene: Scene, progress: bool = True, out_dir: str | Path | None = 
     warm_up_engine(scene)
     compile_time = _time.perf_counter() - t0
     recorder = dx.Recorder(world, every=scene.output.record_every)
+    sim, drive = (None, None) if scene.cosim is None else build_cosim(scene, world, rods)
+    frames = None
+    if scene.output.render:
+        frames = _frame_recorder(scene, sim if sim is not None else world)
+    extra = [frames] if frames is not None else []
     t0 = _time.perf_counter()
-    if scene.cosim is None:
-        world.run(scene.duration, progress=progress, recorder=recorder)
+    if sim is None:
+        world.run(scene.duration, progress=progress, recorder=recorder, callbacks=extra)
     else:
-        sim, drive = build_cosim(scene, world, rods)
         if drive is not None:
             drive.every = sim.dt  # a callback each macro step: the servo targets
         sim.run(scene.duration, progress=progress,
-                callbacks=[recorder] + ([drive] if drive is not None else []))
+                callbacks=[recorder] + extra + ([drive] if drive is not None else []))
     wall = _time.perf_counter() - t0
     # Always keep the final state (the recorder samples on its own grid, which the duration
     # need not be a multiple of).
@@ -605,7 +635,11 @@ def run_scene(scene: Scene, progress: bool = True, out_dir: str | Path | None = 
     result["npz"] = Path(saved) if saved is not None else npz_path
 
     t1 = _time.perf_counter()
-    if scene.output.plot or scene.output.video:
+    if frames is not None:
+        if not frames.times or world.time - frames.times[-1] > 0.5 * world.dt:
+            frames(world)  # the final state too
+        result.update(frames.finish(out, name, video=scene.output.video))
+    elif scene.output.plot or scene.output.video:
         with np.load(result["npz"]) as data:
             times = np.asarray(data["time"])
             positions = plots.rods_from_record(data)
@@ -619,6 +653,16 @@ def run_scene(scene: Scene, progress: bool = True, out_dir: str | Path | None = 
                                               title=title or name, ground_z=ground, labels=labels)
     result.render_time = _time.perf_counter() - t1
     return result
+
+
+def _frame_recorder(scene: Scene, source):
+    from ..visual.camera import Camera
+    from ..visual.movie import FrameRecorder
+
+    c = scene.output.camera
+    camera = None if c is None else Camera(position=c.position, look_at=c.look_at, up=c.up,
+                                           fov_y=c.fov_y, width=c.width, height=c.height)
+    return FrameRecorder(source, camera=camera, every=scene.output.record_every)
 
 
 def _ground_z(scene: Scene) -> float | None:

@@ -45,6 +45,10 @@ def _gl_context_class():
             "set MUJOCO_GL before anything imports OpenGL") from err
     return GLContext
 
+#: Collider colours in order (RGB 0-1): wood, porcelain, blue, slate.
+COLLIDER_COLORS = ((0.55, 0.40, 0.26), (0.90, 0.89, 0.86), (0.22, 0.45, 0.78),
+                   (0.45, 0.47, 0.50))
+
 #: Wire colours (RGB 0-1), the authors' twelve-colour palette in spirit.
 PALETTE = ((0.85, 0.16, 0.14), (0.12, 0.47, 0.80), (0.98, 0.75, 0.10), (0.16, 0.62, 0.30),
            (0.95, 0.45, 0.10), (0.55, 0.27, 0.68), (0.10, 0.10, 0.10), (0.92, 0.92, 0.90),
@@ -151,7 +155,7 @@ class FastRenderer:
         for k, c in enumerate(self._colliders):
             body = spec.worldbody.add_body(name=f"deformx_collider{k}", mocap=True)
             kw = dict(name=f"deformx_collider{k}", contype=0, conaffinity=0,
-                      rgba=[0.62, 0.60, 0.58, 1.0])
+                      rgba=[*COLLIDER_COLORS[k % len(COLLIDER_COLORS)], 1.0])
             size = c.size
             if c.kind == "sphere":
                 body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[size[0], 0, 0], **kw)
