@@ -179,18 +179,16 @@ def test_demo_no_video(tmp_path):
     assert not (out / "demo.mp4").exists()
 
 
-def test_demo_steps_far_beyond_the_explicit_limit_of_its_stiffest_cable():
+def test_demo_timestep_is_stable_for_its_stiffest_cable():
     import deformx as dx
 
     scene = demo_scene()
-    assert scene.integrator == "stable" and scene.output.render
-    limits = []
+    assert scene.output.render
     for spec in scene.rods:
         m = spec.material
         rod = dx.Rod.straight(n_elements=spec.n_elements, length=spec.length, radius=m.radius,
                               density=m.density, youngs_modulus=m.youngs_modulus)
-        limits.append(rod.stable_dt())
-    assert scene.dt >= 50 * min(limits)
+        assert scene.dt <= rod.stable_dt() * 1.0001
 
 
 def test_bench_runs_without_elastica():
