@@ -34,3 +34,15 @@ def test_readme_cosim_example_runs():
     assert abs(sim.time - 1.0) < 1e-9
     # the tool carries the hanging rope's weight (its wrench points down)
     assert sim.wrench("tool_tip")[2] < -0.5 * rope.mass * 9.81
+
+
+def test_readme_render_example_runs(tmp_path, monkeypatch):
+    text = README.read_text()
+    section = text[text.index("## Rendering: RGB, depth, instance masks"):]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    world_code = ("import deformx as dx\nworld = dx.World()\n"
+                  "world.add_rod(dx.Rod.straight(n_elements=10, start=(-0.3, 0, 0.05), "
+                  "length=0.6))\nworld.add_plane()\n")
+    exec(compile(world_code + code, "README.md", "exec"), {})
+    assert (tmp_path / "frames" / "t0_instances.png").is_file()
