@@ -103,6 +103,19 @@ def main() -> None:
     t = time_calls(tube.update, 2000, 5)
     console.print(f"tube kernel: {t * 1e6:.2f} us per update of {nv} vertices = "
                   f"{t * 1e6 * 1000 / nv:.2f} us per 1,000 vertices")
+    from deformx.visual import assets
+
+    rod = world.rods[0]
+    cable = assets.usb_c_cable(length=rod.length, radius=0.004)
+    straight = dx.World()
+    bind = straight.add_rod(dx.Rod.straight(n_elements=rod.n_elements, length=rod.length,
+                                            radius=0.004))
+    skin = cable.skin(bind)
+    bind.positions[:, 2] += 0.01 * np.sin(np.linspace(0, 6, bind.n_nodes))  # bent a little
+    t = time_calls(skin.update, 500, 5)
+    nv = skin.vertices.shape[0]
+    console.print(f"skinning (USB-C-like cable, slerped frames): {t * 1e6:.1f} us per update of "
+                  f"{nv} vertices = {t * 1e6 * 1000 / nv:.2f} us per 1,000 vertices")
     console.print(f"[dim]{time.strftime('%Y-%m-%d %H:%M')}, python {sys.version.split()[0]}, "
                   f"{os.cpu_count()} cores, MUJOCO_GL={os.environ.get('MUJOCO_GL')}[/dim]")
 

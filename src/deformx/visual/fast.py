@@ -97,11 +97,14 @@ class FastRenderer:
 
     ``sides``: vertices around each tube; ``shadows`` and ``shadow_size`` (shadow map, pixels:
     MuJoCo's default 4096 costs ~0.25 s a frame on a CPU); ``colors``: one RGB per rod
-    (default :data:`PALETTE`); ``samples``: multisampling of the RGB pass.
+    (default :data:`PALETTE`); ``samples``: multisampling of the RGB pass; ``skins``: rod
+    index -> :class:`~deformx.visual.skin.Skin` (e.g. ``assets.usb_c_cable(...).skin(rod)``)
+    drawn instead of that rod's tube.
     """
 
     def __init__(self, source: Any, sides: int = 12, shadows: bool = True,
-                 shadow_size: int = 1024, colors: Any = None, samples: int = 4) -> None:
+                 shadow_size: int = 1024, colors: Any = None, samples: int = 4,
+                 skins: dict | None = None) -> None:
         from ..engine.world import World
 
         sim = None
@@ -133,7 +136,9 @@ class FastRenderer:
         spec.worldbody.add_camera(name="deformx_camera", pos=[0, 0, 1])
         ids: list[dict] = []
         # rods first: instance ids 1..n in world order
-        self.tubes = [Tube(rod, sides=sides) for rod in world.rods]
+        skins = skins or {}
+        self.tubes = [skins[i] if i in skins else Tube(rod, sides=sides)
+                      for i, rod in enumerate(world.rods)]
         palette = PALETTE if colors is None else [tuple(c) for c in colors]
         for i, tube in enumerate(self.tubes):
             spec.add_mesh(name=f"deformx_rod{i}", uservert=tube.vertices.ravel().tolist(),
@@ -265,13 +270,15 @@ class FastRenderer:
         m = self.model
         for tube, mid in zip(self.tubes, self._rod_mesh):
             radius = None
+            if camera is not None and not isinstance(tube, Tube):
+                continue  # skinned meshes are drawn as they are
             if camera is not None:
                 z = np.maximum(camera.to_camera(tube.rod.positions)[:, 2], 0.0)
                 floor = 0.75 * z / camera.focal
                 if np.all(tube.radius >= floor):
                     continue
                 radius = np.maximum(tube.radius, floor)
-            tube.update(radius)
+            tube.update() if radius is None else tube.update(radius)
             R = np.zeros(9)
             mujoco.mju_quat2Mat(R, m.mesh_quat[mid])
             R = R.reshape(3, 3)
