@@ -1,0 +1,57 @@
+"""The photoreal renderer (Blender Cycles through bpy, extra [photoreal]): analytic z-depth,
+and masks and depth that agree with the fast renderer's on the same scene. CI runs these in
+its environment with the extra (numpy 1.x, bpy 5.0.1); without bpy they are skipped."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import deformx as dx
+from deformx.visual.camera import Camera
+
+pytest.importorskip("bpy")
+pytest.importorskip("OpenEXR")
+
+from deformx.visual.fast import FastRenderer  # noqa: E402
+from deformx.visual.photoreal import PhotorealRenderer  # noqa: E402
+
+
+def test_depth_of_a_tilted_view_of_a_plane_is_the_analytic_z_depth():
+    world = dx.World()
+    world.add_rod(dx.Rod.straight(n_elements=4, start=(50, 50, 1), length=0.1))
+    world.add_plane()
+    cam = Camera(position=(0.1, -0.2, 1.0), look_at=(0.4, 0.5, 0.0), fov_y=50, width=64,
+                 height=48)
+    frame = PhotorealRenderer(world, samples=2, denoise=False).render(cam)
+    rays = cam.rays() @ cam.rotation.T
+    expected = (0.0 - cam.position[2]) / rays[..., 2]
+    ok = (expected > 0) & (expected < 9.0)  # the plane is 20 m wide
+    assert ok.mean() > 0.9
+    np.testing.assert_allclose(frame.depth[ok], expected[ok], atol=1e-3)
+    assert np.all(frame.instances[ok] == 2)
+
+
+def test_masks_and_depth_agree_with_the_fast_renderer(tmp_path):
+    world = dx.World()
+    world.add_rod(dx.Rod.straight(n_elements=20, start=(-0.3, 0, 0.1), direction=(1, 0, 0),
+                                  length=0.6, radius=0.01))
+    world.add_rod(dx.Rod.straight(n_elements=20, start=(0, -0.3, 0.15), direction=(0, 1, 0),
+                                  length=0.6, radius=0.008))
+    world.add_plane()
+    world.add_box((0.05, 0.05, 0.05), pose=(0.2, 0.2, 0.05))
+    cam = Camera(position=(0.8, -0.8, 0.6), look_at=(0, 0, 0.05), width=160, height=120)
+    photo = PhotorealRenderer(world, samples=4)
+    a = photo.render(cam, amodal=True)
+    b = FastRenderer(world, sides=16).render(cam, amodal=True)
+    assert a.ids == b.ids
+    for i in (1, 2):
+        ma, mb = a.instances == i, b.instances == i
+        assert (ma & mb).sum() / (ma | mb).sum() >= 0.9
+        aa, ab = a.amodal[i], b.amodal[i]
+        assert (aa & ab).sum() / (aa | ab).sum() >= 0.9
+    both = np.isfinite(a.depth) & np.isfinite(b.depth) & (a.instances == b.instances)
+    assert np.median(np.abs(a.depth[both] - b.depth[both])) < 1e-3
+    assert a.rgb.shape == (120, 160, 3) and a.rgb.std() > 5
+    path = photo.save_blend(tmp_path / "scene.blend")
+    assert path.stat().st_size > 10000
