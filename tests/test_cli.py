@@ -234,3 +234,13 @@ def test_render_command_writes_rendered_outputs(tmp_path):
     assert res.exit_code == 0, res.output
     assert (out / "drape.png").is_file() and (out / "frames" / "last_instances.png").is_file()
     assert "contact sheet" in res.output
+
+
+def test_demo_photoreal_without_the_extra_says_how_to_install_it(tmp_path):
+    try:
+        import bpy  # noqa: F401
+        pytest.skip("bpy is installed here: tests/test_visual_photoreal.py runs the option")
+    except ImportError:
+        pass
+    res = invoke(["demo", "--duration", "0.01", "--out", tmp_path, "--photoreal", "--no-progress"])
+    assert res.exit_code != 0 and "[photoreal]" in res.output

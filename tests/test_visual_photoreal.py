@@ -55,3 +55,20 @@ def test_masks_and_depth_agree_with_the_fast_renderer(tmp_path):
     assert a.rgb.shape == (120, 160, 3) and a.rgb.std() > 5
     path = photo.save_blend(tmp_path / "scene.blend")
     assert path.stat().st_size > 10000
+
+
+def test_demo_photoreal_key_frames(tmp_path):
+    from typer.testing import CliRunner
+
+    from deformx.cli import app
+
+    out = tmp_path / "demo"
+    res = CliRunner().invoke(app, ["demo", "--duration", "0.1", "--out", str(out), "--no-video",
+                                   "--no-progress", "--photoreal", "--samples", "1"])
+    assert res.exit_code == 0, res.output
+    rgb = sorted((out / "photoreal").glob("*_rgb.png"))
+    assert len(rgb) == 3
+    import imageio.v3 as iio
+
+    ids = iio.imread(sorted((out / "photoreal").glob("*_instances.png"))[-1])
+    assert set(range(1, 6)) <= set(np.unique(ids).tolist())  # the five cables

@@ -206,16 +206,59 @@ def demo(
     duration: float = typer.Option(2.0, "--duration", "-d", min=1e-6, help="Simulated seconds."),
     video: bool = typer.Option(True, "--video/--no-video", help="Also write demo.mp4."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar (and a spinner while kernels compile)."),
+    photoreal: bool = typer.Option(False, "--photoreal", help="Also render key frames with Blender Cycles (extra [photoreal])."),
+    samples: int = typer.Option(16, "--samples", min=1, help="Cycles samples per pixel for --photoreal."),
 ) -> None:
     """Five cables of different colour and stiffness fall onto a table with a blob and a box.
 
     Writes demo.npz (trajectories), demo.mp4 (rendered video), demo.png (contact sheet) and
-    frames/ (the last frame's RGB, depth, instance masks, camera.json) to --out.
+    frames/ (the last frame's RGB, depth, instance masks, camera.json) to --out; with
+    --photoreal also photoreal/ (three key frames path-traced by Cycles).
     """
     scene = demo_scene(duration=duration, out=out, video=video)
+    if photoreal:
+        try:
+            import bpy  # noqa: F401
+            import OpenEXR  # noqa: F401
+        except ImportError:
+            _fail("--photoreal needs the [photoreal] extra: python -m pip install "
+                  "\".[photoreal]\" \"numpy<2\" (Python 3.11; on 3.13 numpy>=2.2)")
     console.print(f"[bold]DeformX demo[/bold]: {len(scene.rods)} cables, {duration:g} s simulated, "
                   f"dt = {scene.dt:.3g} s -> {out}")
     _run_and_report(scene, out, "DeformX demo: cables draping over a table", progress)
+    if photoreal:
+        paths = photoreal_key_frames(scene, Path(out) / "demo.npz", Path(out) / "photoreal",
+                                     samples=samples)
+        console.print(f"photoreal key frames ({samples} samples, Cycles): "
+                      + ", ".join(str(p) for p in paths))
+
+
+def photoreal_key_frames(scene, record: Path, out: Path, samples: int = 16,
+                         count: int = 3) -> list[Path]:
+    """Re-pose the scene's world at ``count`` recorded times (first, middle, last) and render
+    each with the photoreal renderer; returns the RGB paths."""
+    import numpy as np
+
+    from .apps.scenes import build_world
+    from .visual.camera import Camera
+    from .visual.photoreal import PhotorealRenderer
+
+    world, rods = build_world(scene)
+    c = scene.output.camera
+    cam = Camera(position=c.position, look_at=c.look_at, up=c.up, fov_y=c.fov_y,
+                 width=c.width, height=c.height)
+    renderer = PhotorealRenderer(world, samples=samples)
+    paths = []
+    with np.load(record) as data:
+        times = data["time"]
+        for k in np.unique(np.linspace(0, len(times) - 1, count).round().astype(int)):
+            for i, rod in enumerate(rods):
+                rod.positions[:] = data[f"rod{i}_positions"][k]
+                rod.directors[:] = data[f"rod{i}_directors"][k]
+            frame = renderer.render(cam)
+            saved = frame.save(out, stem=f"t{times[k]:.2f}s_")
+            paths.append(saved["rgb"])
+    return paths
 
 
 @app.command()
