@@ -72,3 +72,29 @@ def test_demo_photoreal_key_frames(tmp_path):
 
     ids = iio.imread(sorted((out / "photoreal").glob("*_instances.png"))[-1])
     assert set(range(1, 6)) <= set(np.unique(ids).tolist())  # the five cables
+
+
+def test_cosimulation_ids_agree_with_the_fast_renderer():
+    from deformx import cosim, robots
+
+    xml = robots.ur5e(tool_length=0.3, floor=True, q0=(0.0, -1.2, 1.5, -1.87, -1.57, 0.0))
+    backend = cosim.MujocoBackend(xml, keyframe="home")
+    tip = backend.motion("tool_tip").position
+    world = dx.World(dt=backend.dt, integrator="stable")
+    rope = world.add_rod(dx.Rod.straight(n_elements=10, start=tip, direction=(0, 0, -1),
+                                         length=0.3, radius=0.008))
+    sim = cosim.CoSimulation(world, backend)
+    sim.add_colliders("world")
+    sim.attach(rope, "start", body="tool_tip")
+    sim.step()
+    cam = Camera(position=tuple(tip + [0.7, -0.7, 0.3]), look_at=tuple(tip - [0, 0, 0.15]),
+                 width=200, height=150)
+    a = PhotorealRenderer(sim, samples=2, denoise=False).render(cam)
+    b = FastRenderer(sim).render(cam)
+    assert a.ids == b.ids
+    assert (a.instances == 1).sum() >= 10 and (b.instances == 1).sum() >= 10  # the rope
+    seen = [e for e in b.ids if (b.instances == e["id"]).sum() >= 50]
+    assert any(e["kind"] == "body" and e["name"] != "world" for e in seen)
+    for e in seen:  # the rope and every robot link in view
+        ma, mb = a.instances == e["id"], b.instances == e["id"]
+        assert (ma & mb).sum() / (ma | mb).sum() >= 0.85, e

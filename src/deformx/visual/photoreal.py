@@ -79,21 +79,28 @@ def _material(bpy, name: str, color, roughness: float = 0.75, metallic: float = 
 
 
 class PhotorealRenderer:
-    """Renders a :class:`deformx.World` (rods, colliders, planes) with Cycles.
+    """Renders a :class:`deformx.World` (rods, colliders, planes) or a co-simulation (and
+    its MuJoCo geoms) with Cycles.
 
     ``samples`` per pixel, ``denoise`` (OpenImageDenoise), ``max_bounces``, ``sides`` of the
     tubes, ``skins`` (rod index -> Skin) and ``colors`` as for the fast renderer; ``threads``
     (default: all cores).
     """
 
-    def __init__(self, world: Any, samples: int = 32, denoise: bool = True,
+    def __init__(self, source: Any, samples: int = 32, denoise: bool = True,
                  max_bounces: int = 6, sides: int = 16, skins: dict | None = None,
                  colors: Any = None, threads: int | None = None) -> None:
         from ..engine.world import World
 
-        if not isinstance(world, World):
-            raise ValueError("PhotorealRenderer renders a deformx.World (co-simulations: use "
-                             "the FastRenderer for now)")
+        sim = None
+        if isinstance(source, World):
+            world = source
+        elif hasattr(source, "world") and hasattr(source, "backend"):
+            sim, world = source, source.world
+        else:
+            raise ValueError(f"source must be a deformx.World or a CoSimulation, got "
+                             f"{type(source).__name__}")
+        self.sim = sim
         bpy = self.bpy = _bpy()
         import addon_utils
 
@@ -146,8 +153,14 @@ class PhotorealRenderer:
                                     _material(bpy, f"rod_{i}", palette[i % len(palette)]))
             self._rod_data.append(obj.data)
             self._add_id(obj, "rod", f"rod {i}")
+        # colliders and planes standing for MuJoCo geoms are drawn as those geoms
+        from_bodies, body_planes = set(), set()
+        if sim is not None:
+            for bc in sim.bodies.values():
+                from_bodies.update(id(c) for c in bc.colliders)
+                body_planes.update(bc.planes)
         self._collider_objs = []
-        for k, c in enumerate(world.colliders):
+        for k, c in enumerate(c for c in world.colliders if id(c) not in from_bodies):
             V, F = _collider_mesh(c)
             obj = self._mesh_object(f"collider_{k}", V, F, _material(
                 bpy, f"collider_{k}", COLLIDER_COLORS[k % len(COLLIDER_COLORS)], 0.6),
@@ -155,6 +168,8 @@ class PhotorealRenderer:
             self._collider_objs.append((obj, c))
             self._add_id(obj, "collider", f"collider {c.index} ({c.kind})")
         for k, (p, n) in enumerate(world.planes):
+            if k in body_planes:
+                continue
             R = _frame_z(n)
             quad = np.array([[-10, -10, 0], [10, -10, 0], [10, 10, 0], [-10, 10, 0.0]])
             obj = self._mesh_object(f"plane_{k}", quad, np.array([[0, 1, 2], [0, 2, 3]]),
@@ -162,7 +177,60 @@ class PhotorealRenderer:
                                               checker=True), smooth=False)
             obj.matrix_world = self._matrix(R, p)
             self._add_id(obj, "plane", f"plane {k}")
+        self._geom_objs = self._mujoco_geoms(sim) if sim is not None else []
         self._tmp = tempfile.TemporaryDirectory(prefix="deformx-cycles-")
+
+    def _mujoco_geoms(self, sim) -> list:
+        """One object per visible MuJoCo geom (groups 0-2, not transparent), an instance id per
+        body with geoms (as the fast renderer numbers them), posed each frame."""
+        import trimesh
+
+        m = sim.backend.model
+        out = []
+        for b in range(m.nbody):
+            geoms = np.flatnonzero(m.geom_bodyid == b)
+            if not len(geoms):
+                continue
+            pass_index = len(self.ids) + 1
+            self.ids.append({"id": pass_index, "kind": "body", "name": m.body(b).name or "world"})
+            for g in geoms:
+                if m.geom_group[g] > 2 or m.geom_rgba[g, 3] == 0.0:
+                    continue
+                t, size = int(m.geom_type[g]), m.geom_size[g]
+                if t == 0:  # plane
+                    V = np.array([[-10, -10, 0], [10, -10, 0], [10, 10, 0], [-10, 10, 0.0]])
+                    F = np.array([[0, 1, 2], [0, 2, 3]])
+                elif t == 2:
+                    tm = trimesh.creation.icosphere(subdivisions=3, radius=size[0])
+                elif t == 3:
+                    tm = trimesh.creation.capsule(height=2 * size[1], radius=size[0],
+                                                  count=[24, 24])
+                elif t == 4:
+                    tm = trimesh.creation.icosphere(subdivisions=3)
+                    tm.vertices *= size
+                elif t == 5:
+                    tm = trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=32)
+                elif t == 6:
+                    tm = trimesh.creation.box(extents=2 * size)
+                elif t == 7:
+                    k = int(m.geom_dataid[g])
+                    v0, nv = m.mesh_vertadr[k], m.mesh_vertnum[k]
+                    f0, nf = m.mesh_faceadr[k], m.mesh_facenum[k]
+                    tm = trimesh.Trimesh(m.mesh_vert[v0:v0 + nv], m.mesh_face[f0:f0 + nf],
+                                         process=False)
+                else:
+                    continue  # heightfields, SDFs: not drawn
+                if t != 0:
+                    V, F = np.asarray(tm.vertices), np.asarray(tm.faces)
+                rgba = m.geom_rgba[g]
+                if m.geom_matid[g] >= 0:
+                    rgba = m.mat_rgba[m.geom_matid[g]]
+                obj = self._mesh_object(f"geom_{g}", V, F, _material(
+                    self.bpy, f"geom_{g}", tuple(float(c) for c in rgba[:3]), 0.5,
+                    checker=t == 0), smooth=t in (2, 3, 4, 5))
+                obj.pass_index = pass_index
+                out.append((obj, int(g)))
+        return out
 
     # ------------------------------------------------------------------ building
     def _add_id(self, obj, kind: str, name: str) -> None:
@@ -199,6 +267,13 @@ class PhotorealRenderer:
             data.update()
         for obj, c in self._collider_objs:
             obj.matrix_world = self._matrix(c.rotation, c.position)
+        if self._geom_objs:
+            import mujoco
+
+            m, d = self.sim.backend.model, self.sim.backend.data
+            mujoco.mj_kinematics(m, d)  # after mj_step the poses are one step stale
+            for obj, g in self._geom_objs:
+                obj.matrix_world = self._matrix(d.geom_xmat[g].reshape(3, 3), d.geom_xpos[g])
 
     def _set_camera(self, camera: Camera) -> None:
         s, cam = self.scene, self.camera_obj.data
