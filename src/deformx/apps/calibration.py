@@ -14,8 +14,6 @@ import csv
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
-
 import numpy as np
 
 from ..engine.running import progress_bar
@@ -165,7 +163,7 @@ class Experiment:
 
     def step(self) -> None:
         """One control step: servo targets from the tool's path, then one macro step."""
-        m, d = self.backend.model, self.backend.data
+        d = self.backend.data
         target = self.tool_target(self.time + self.setup.dt)
         self._q = self._solve(self._ik_model, "tool_tip", target, self._q, rest=self._rest,
                               iterations=3)

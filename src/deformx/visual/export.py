@@ -77,7 +77,7 @@ class UsdWriter:
 
     def save(self) -> Path:
         """Write the stage; returns its path."""
-        from pxr import Gf, Sdf, Usd, UsdGeom, Vt
+        from pxr import Gf, Usd, UsdGeom, Vt
 
         if not self.times:
             self()

@@ -363,15 +363,7 @@ class FastRenderer:
         instances, depth = self._id_pass(camera)
         frame = Frame(rgb=rgb, depth=depth, instances=instances, ids=list(self.ids),
                       camera=camera)
-        for i, rod in enumerate(self.world.rods):
-            uv, z = camera.project(rod.positions)
-            vis = np.zeros(len(z), dtype=bool)
-            ok = np.isfinite(uv).all(axis=1) & (uv[:, 0] >= 0) & (uv[:, 0] < W) & \
-                (uv[:, 1] >= 0) & (uv[:, 1] < H)
-            iu, iv = uv[ok, 0].astype(int), uv[ok, 1].astype(int)
-            vis[ok] = z[ok] - depth[iv, iu] <= 1.5 * rod.node_radius[ok] + 1e-3
-            frame.keypoints.append(uv)
-            frame.visible.append(vis)
+        frame.add_keypoints(self.world.rods)
         if amodal:
             frame.amodal = self._amodal(camera)
         return frame

@@ -28,6 +28,21 @@ class Frame:
     visible: list[np.ndarray] = field(default_factory=list)
     amodal: dict[int, np.ndarray] = field(default_factory=dict)
 
+    def add_keypoints(self, rods) -> None:
+        """Project each rod's nodes with the camera; a node is visible where the depth image
+        is not nearer than the node less 1.5 radii (plus 1 mm)."""
+        cam, depth = self.camera, self.depth
+        W, H = cam.width, cam.height
+        for rod in rods:
+            uv, z = cam.project(rod.positions)
+            vis = np.zeros(len(z), dtype=bool)
+            ok = np.isfinite(uv).all(axis=1) & (uv[:, 0] >= 0) & (uv[:, 0] < W) & \
+                (uv[:, 1] >= 0) & (uv[:, 1] < H)
+            iu, iv = uv[ok, 0].astype(int), uv[ok, 1].astype(int)
+            vis[ok] = z[ok] - depth[iv, iu] <= 1.5 * rod.node_radius[ok] + 1e-3
+            self.keypoints.append(uv)
+            self.visible.append(vis)
+
     def mask(self, instance: int) -> np.ndarray:
         """(H, W) bool mask of one instance id."""
         return self.instances == instance

@@ -332,16 +332,7 @@ class PhotorealRenderer:
         depth[depth >= _BACKGROUND_DEPTH] = np.inf
         index = np.rint(ch["ViewLayer.Object Index.X"]).astype(np.uint16)
         frame = Frame(rgb=rgb, depth=depth, instances=index, ids=list(self.ids), camera=camera)
-        W, H = camera.width, camera.height
-        for rod in self.world.rods:
-            uv, z = camera.project(rod.positions)
-            vis = np.zeros(len(z), dtype=bool)
-            ok = np.isfinite(uv).all(axis=1) & (uv[:, 0] >= 0) & (uv[:, 0] < W) & \
-                (uv[:, 1] >= 0) & (uv[:, 1] < H)
-            iu, iv = uv[ok, 0].astype(int), uv[ok, 1].astype(int)
-            vis[ok] = z[ok] - depth[iv, iu] <= 1.5 * rod.node_radius[ok] + 1e-3
-            frame.keypoints.append(uv)
-            frame.visible.append(vis)
+        frame.add_keypoints(self.world.rods)
         if amodal:
             frame.amodal = self._amodal()
         return frame
