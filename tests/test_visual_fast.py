@@ -13,7 +13,7 @@ import pytest
 import deformx as dx
 from deformx.visual.camera import Camera
 from deformx.visual.fast import FastRenderer
-from deformx.visual.tube import Tube, tube_vertices
+from deformx.visual.tube import Tube
 
 
 def test_depth_of_a_tilted_view_of_a_plane_is_the_analytic_z_depth():
