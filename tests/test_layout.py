@@ -30,3 +30,9 @@ def test_cosim_is_loaded_only_on_request_and_knows_no_higher_layer():
     assert _loaded_after("import deformx", ("mujoco", "deformx.cosim")) == []
     assert _loaded_after("import deformx.cosim, deformx.robots",
                          ("deformx.visual", "deformx.apps", "matplotlib")) == []
+
+
+def test_visual_names_of_the_public_api_load_on_first_use():
+    assert _loaded_after("import deformx.visual", ("mujoco", "bpy")) == []
+    assert _loaded_after("from deformx import visual; visual.Camera, visual.FastRenderer",
+                         ("mujoco",)) == ["mujoco"]
