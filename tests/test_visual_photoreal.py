@@ -98,3 +98,24 @@ def test_cosimulation_ids_agree_with_the_fast_renderer():
     for e in seen:  # the rope and every robot link in view
         ma, mb = a.instances == e["id"], b.instances == e["id"]
         assert (ma & mb).sum() / (ma | mb).sum() >= 0.85, e
+
+
+def test_a_skinned_cable_asset_keeps_its_part_materials():
+    from deformx.visual import assets
+
+    world = dx.World()
+    rod = world.add_rod(dx.Rod.straight(n_elements=12, start=(-0.2, 0, 0.02), direction=(1, 0, 0),
+                                        length=0.4, radius=0.003))
+    world.add_plane()
+    cable = assets.usb_c_cable(length=0.4, radius=0.003)
+    renderer = PhotorealRenderer(world, samples=2, denoise=False, skins={0: cable.skin(rod)})
+    mesh = renderer.bpy.data.objects["rod_0"].data
+    assert [m.name for m in mesh.materials] == ["rod_0_part0", "rod_0_part1", "rod_0_part2"]
+    index = np.zeros(len(mesh.polygons), dtype=np.int32)
+    mesh.polygons.foreach_get("material_index", index)
+    np.testing.assert_array_equal(index, cable.part)
+    shell = mesh.materials[2].node_tree.nodes["Principled BSDF"].inputs["Metallic"]
+    assert shell.default_value == 1.0
+    frame = renderer.render(Camera(position=(0, -0.5, 0.4), look_at=(0, 0, 0), width=80,
+                                   height=60))
+    assert (frame.instances == 1).sum() > 20

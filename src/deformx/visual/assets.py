@@ -49,7 +49,9 @@ class CableAsset:
         Q = rod.directors[0]
         R = np.column_stack([Q[2], Q[0], Q[1]])  # cable (x, y, z) -> (d3, d1, d2)
         world = self.vertices @ R.T + rod.positions[0]
-        return Skin(rod, (world, self.faces), rigid=self.labels)
+        skin = Skin(rod, (world, self.faces), rigid=self.labels)
+        skin.materials, skin.part = list(self.materials.values()), self.part  # per face
+        return skin
 
     def trimesh(self):
         import trimesh

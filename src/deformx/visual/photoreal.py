@@ -151,6 +151,14 @@ class PhotorealRenderer:
             m.update()
             obj = self._mesh_object(f"rod_{i}", m.vertices, m.faces,
                                     _material(bpy, f"rod_{i}", palette[i % len(palette)]))
+            parts = getattr(m, "materials", None)
+            if parts:  # a cable asset: one material per part (jacket, plug, shell, ...)
+                obj.data.materials.clear()
+                for k, mat in enumerate(parts):
+                    obj.data.materials.append(_material(bpy, f"rod_{i}_part{k}", mat.color,
+                                                        mat.roughness, mat.metallic))
+                obj.data.polygons.foreach_set("material_index",
+                                              np.asarray(m.part, dtype=np.int32))
             self._rod_data.append(obj.data)
             self._add_id(obj, "rod", f"rod {i}")
         # colliders and planes standing for MuJoCo geoms are drawn as those geoms
