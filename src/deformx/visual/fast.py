@@ -61,6 +61,29 @@ def _quat(R: np.ndarray) -> np.ndarray:
     return q
 
 
+def world_and_sim(source: Any) -> tuple[Any, Any]:
+    """``(world, co_simulation or None)`` of what a renderer is given."""
+    from ..engine.world import World
+
+    if isinstance(source, World):
+        return source, None
+    if hasattr(source, "world") and hasattr(source, "backend"):
+        return source.world, source
+    raise ValueError(f"source must be a deformx.World or a CoSimulation, got "
+                     f"{type(source).__name__}")
+
+
+def drawn_by_bodies(sim) -> tuple[set, set]:
+    """Colliders (by id) and plane indices that stand for a co-simulation's MuJoCo geoms:
+    renderers draw those geoms instead."""
+    colliders, planes = set(), set()
+    if sim is not None:
+        for bc in sim.bodies.values():
+            colliders.update(id(c) for c in bc.colliders)
+            planes.update(bc.planes)
+    return colliders, planes
+
+
 class _Pass:
     """An OpenGL context and MuJoCo render context of a given size and multisampling."""
 
@@ -105,16 +128,7 @@ class FastRenderer:
     def __init__(self, source: Any, sides: int = 12, shadows: bool = True,
                  shadow_size: int = 1024, colors: Any = None, samples: int = 4,
                  skins: dict | None = None) -> None:
-        from ..engine.world import World
-
-        sim = None
-        if isinstance(source, World):
-            world = source
-        elif hasattr(source, "world") and hasattr(source, "backend"):
-            sim, world = source, source.world
-        else:
-            raise ValueError(f"source must be a deformx.World or a CoSimulation, got "
-                             f"{type(source).__name__}")
+        world, sim = world_and_sim(source)
         self.world, self.sim = world, sim
         self.samples = int(samples)
         spec = self._base_spec(sim)
@@ -150,11 +164,7 @@ class FastRenderer:
                                     conaffinity=0)
             ids.append({"id": len(ids) + 1, "kind": "rod", "name": f"rod {i}"})
         # colliders standing for co-simulated bodies are drawn by MuJoCo's own geoms
-        from_bodies, body_planes = set(), set()
-        if sim is not None:
-            for bc in sim.bodies.values():
-                from_bodies.update(id(c) for c in bc.colliders)
-                body_planes.update(bc.planes)
+        from_bodies, body_planes = drawn_by_bodies(sim)
         self._planes = [k for k in range(len(world.planes)) if k not in body_planes]
         self._colliders = [c for c in world.colliders if id(c) not in from_bodies]
         for k, c in enumerate(self._colliders):

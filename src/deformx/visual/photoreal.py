@@ -24,7 +24,7 @@ import numpy as np
 
 from .camera import Camera
 from .export import _collider_mesh, _drawables
-from .fast import COLLIDER_COLORS, PALETTE, _frame_z
+from .fast import COLLIDER_COLORS, PALETTE, _frame_z, drawn_by_bodies, world_and_sim
 from .frame import Frame
 
 _BACKGROUND_DEPTH = 1e9  # Blender writes 1e10 where a ray hits nothing
@@ -90,16 +90,7 @@ class PhotorealRenderer:
     def __init__(self, source: Any, samples: int = 32, denoise: bool = True,
                  max_bounces: int = 6, sides: int = 16, skins: dict | None = None,
                  colors: Any = None, threads: int | None = None) -> None:
-        from ..engine.world import World
-
-        sim = None
-        if isinstance(source, World):
-            world = source
-        elif hasattr(source, "world") and hasattr(source, "backend"):
-            sim, world = source, source.world
-        else:
-            raise ValueError(f"source must be a deformx.World or a CoSimulation, got "
-                             f"{type(source).__name__}")
+        world, sim = world_and_sim(source)
         self.sim = sim
         bpy = self.bpy = _bpy()
         import addon_utils
@@ -162,11 +153,7 @@ class PhotorealRenderer:
             self._rod_data.append(obj.data)
             self._add_id(obj, "rod", f"rod {i}")
         # colliders and planes standing for MuJoCo geoms are drawn as those geoms
-        from_bodies, body_planes = set(), set()
-        if sim is not None:
-            for bc in sim.bodies.values():
-                from_bodies.update(id(c) for c in bc.colliders)
-                body_planes.update(bc.planes)
+        from_bodies, body_planes = drawn_by_bodies(sim)
         self._collider_objs = []
         for k, c in enumerate(c for c in world.colliders if id(c) not in from_bodies):
             V, F = _collider_mesh(c)
