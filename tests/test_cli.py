@@ -236,6 +236,32 @@ def test_render_command_writes_rendered_outputs(tmp_path):
     assert "contact sheet" in res.output
 
 
+def test_rod_looks_in_a_scene_file_choose_materials_textures_and_cable_assets(tmp_path):
+    from deformx.apps.scenes import _frame_recorder, build_world, load_scene
+    from deformx.visual.skin import Skin
+
+    scene = load_scene(REPO / "examples" / "scenes" / "stiff_cables.yaml")
+    world, _ = build_world(scene)
+    recorder = _frame_recorder(scene, world)
+    mats = recorder.renderer.materials
+    assert mats[0].metallic == 1.0 and mats[1].texture == "stripe"
+    assert isinstance(recorder.renderer.tubes[2], Skin)  # the USB-C model on the PVC cable
+    frame = recorder.renderer.render(recorder.camera)
+    assert {1, 2, 3} <= set(np.unique(frame.instances))
+    # errors name the field
+    raw = yaml.safe_load((REPO / "examples" / "scenes" / "stiff_cables.yaml").read_text())
+    raw["rods"][1]["look"]["texture"] = "missing.png"
+    path = tmp_path / "s.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    bad = load_scene(path)
+    with pytest.raises(ValueError, match=r"rods\[1\]\.look\.texture"):
+        _frame_recorder(bad, build_world(bad)[0])
+    raw["rods"][1]["look"] = {"asset": "garden_hose"}
+    path.write_text(yaml.safe_dump(raw))
+    res = invoke(["run", path, "--out", tmp_path, "--no-progress"])
+    assert res.exit_code != 0 and "asset" in res.output
+
+
 def test_demo_photoreal_without_the_extra_says_how_to_install_it(tmp_path):
     try:
         import bpy  # noqa: F401

@@ -98,7 +98,8 @@ def test_projection_lands_where_the_renderer_draws_a_point():
 
 
 def _tube_reference(pos, Q, radius, sides):
-    """A NumPy construction of the tube vertices (open rod), for the kernel to match."""
+    """A NumPy construction of the tube vertices (open rod; rings of sides + 1 vertices, the
+    last on the seam), for the kernel to match."""
     t = Q[:, 2]
     d1 = Q[:, 0]
     tn = np.vstack([t[:1], t[:-1] + t[1:], t[-1:]])
@@ -107,7 +108,7 @@ def _tube_reference(pos, Q, radius, sides):
     un = un - np.sum(un * tn, axis=1, keepdims=True) * tn
     un /= np.linalg.norm(un, axis=1, keepdims=True)
     wn = np.cross(tn, un)
-    ang = 2 * np.pi * np.arange(sides) / sides
+    ang = 2 * np.pi * np.arange(sides + 1) / sides
     ring = np.cos(ang)[None, :, None] * un[:, None] + np.sin(ang)[None, :, None] * wn[:, None]
     verts = pos[:, None] + radius[:, None, None] * ring
     return np.vstack([verts.reshape(-1, 3), pos[:1], pos[-1:]])
@@ -126,9 +127,9 @@ def test_tube_kernel_equals_a_numpy_construction_and_turns_with_twist():
     Q = rod.directors[-1]
     c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
     rod.directors[-1] = np.array([c * Q[0] + s * Q[1], -s * Q[0] + c * Q[1], Q[2]])
-    before = tube.vertices[14 * 10:15 * 10].copy()
+    before = tube.vertices[14 * 11:15 * 11].copy()
     tube.update()
-    after = tube.vertices[14 * 10:15 * 10]
+    after = tube.vertices[14 * 11:15 * 11]
     r0 = before[0] - rod.positions[-1]
     r1 = after[0] - rod.positions[-1]
     assert math.degrees(math.acos(np.clip(r0 @ r1 / (r0 @ r0), -1, 1))) == pytest.approx(30, abs=1e-6)
@@ -188,3 +189,89 @@ def test_renders_a_cosimulation_with_an_id_per_mujoco_body():
     assert frame.ids[0]["kind"] == "rod" and "plane" not in [e["kind"] for e in frame.ids]
     seen = set(np.unique(frame.instances).tolist())
     assert {1, kinds["world"], kinds["upper_arm_link"]} <= seen
+
+
+def _twist(rod, angle: float) -> None:
+    """Turn the material frames about their tangents, linearly from 0 to ``angle``."""
+    E = rod.n_elements
+    for e in range(E):
+        th = angle * (e + 0.5) / E
+        Q = rod.directors[e].copy()
+        c, s = math.cos(th), math.sin(th)
+        rod.directors[e] = np.array([c * Q[0] + s * Q[1], -s * Q[0] + c * Q[1], Q[2]])
+
+
+def striped_wire_scene():
+    """A straight wire with a yellow stripe on its d1 side, d1 facing a camera above it."""
+    from deformx.visual.materials import Material
+
+    world = dx.World()
+    rod = world.add_rod(dx.Rod.straight(n_elements=40, start=(-0.3, 0, 0.1), length=0.6,
+                                        radius=0.01, normal=(0, 0, 1)))
+    look = Material((0.1, 0.2, 0.8), texture="stripe", texture_color=(1.0, 1.0, 0.0))
+    cam = Camera(position=(0, 0, 1.0), look_at=(0, 0, 0.1), up=(0, 1, 0), fov_y=45, width=320,
+                 height=240)
+    return world, rod, look, cam
+
+
+def stripe_columns(frame, cam, rod):
+    """Position along the wire (0..1) of each image column over it, and whether the stripe's
+    yellow shows there."""
+    x0, x1 = cam.project(rod.positions[[0, -1]])[0][:, 0]
+    rgb = frame.rgb.astype(int)
+    yellow = (rgb[..., 0] > rgb[..., 2] + 60) & (rgb[..., 1] > rgb[..., 2] + 60) & (
+        frame.instances == 1)
+    cols = np.arange(int(x0) + 2, int(x1) - 2)
+    return (cols - x0) / (x1 - x0), yellow[:, cols].any(axis=0)
+
+
+def test_a_striped_texture_winds_round_a_twisted_wire():
+    world, rod, look, cam = striped_wire_scene()
+    r = FastRenderer(world, materials={0: look}, shadows=False)
+    _, seen = stripe_columns(r.render(cam), cam, rod)
+    assert seen.mean() > 0.97  # along the whole wire, also across the texture's seam (on d1)
+    _twist(rod, math.pi)  # d1 turns from facing the camera to facing away
+    s, seen = stripe_columns(r.render(cam), cam, rod)
+    assert seen[s < 0.25].mean() > 0.95
+    assert seen[s > 0.75].mean() < 0.02
+
+
+def test_an_image_texture_is_laid_out_rows_round_from_d1_columns_along():
+    from deformx.visual.materials import Material
+
+    img = np.zeros((64, 64, 3), np.uint8)
+    img[..., 2] = 200
+    img[13:19] = (255, 255, 0)  # rows at t = 0.2-0.3 of the circumference: round d2
+    world = dx.World()
+    rod = world.add_rod(dx.Rod.straight(n_elements=40, start=(-0.3, 0, 0.1), length=0.6,
+                                        radius=0.01, normal=(0, 1, 0)))  # d2 = +z
+    cam = Camera(position=(0, 0, 1.0), look_at=(0, 0, 0.1), up=(0, 1, 0), fov_y=45, width=320,
+                 height=240)
+    r = FastRenderer(world, materials={0: Material(texture=img)}, shadows=False)
+
+    def yellow_fraction():
+        f = r.render(cam)
+        rgb = f.rgb.astype(int)
+        wire = f.instances == 1
+        return np.sum((rgb[..., 0] > rgb[..., 2] + 60) & wire) / wire.sum()
+
+    assert 0.15 < yellow_fraction() < 0.4  # the band faces the camera
+    rod.directors[:] = rod.directors[:, [1, 0, 2]] * np.array([-1.0, 1.0, 1.0])[:, None]
+    assert yellow_fraction() < 0.01  # d1 -> d2 = -d1 before: the band now faces away
+
+
+def test_material_errors_name_the_parameter():
+    from deformx.visual.materials import Material
+
+    with pytest.raises(ValueError, match="roughness"):
+        Material(roughness=2.0)
+    with pytest.raises(ValueError, match="color"):
+        Material(color=(1.0, 0.0))
+    with pytest.raises(ValueError, match="texture_scale"):
+        Material(texture="bands", texture_scale=0.0)
+    with pytest.raises(ValueError, match="texture must be"):
+        Material(texture="no-such-pattern")
+    world = dx.World()
+    world.add_rod(dx.Rod.straight(n_elements=4))
+    with pytest.raises(ValueError, match="materials\\[0\\]"):
+        FastRenderer(world, materials={0: "red"})

@@ -119,3 +119,19 @@ def test_a_skinned_cable_asset_keeps_its_part_materials():
     frame = renderer.render(Camera(position=(0, -0.5, 0.4), look_at=(0, 0, 0), width=80,
                                    height=60))
     assert (frame.instances == 1).sum() > 20
+
+
+def test_a_striped_texture_turns_with_twist_as_in_the_fast_renderer():
+    import math
+
+    from .test_visual_fast import _twist, stripe_columns, striped_wire_scene
+
+    world, rod, look, cam = striped_wire_scene()
+    world.add_plane(point=(0, 0, -0.5))  # something to bounce light from
+    _twist(rod, math.pi)
+    fast = FastRenderer(world, materials={0: look}, shadows=False).render(cam)
+    real = PhotorealRenderer(world, samples=8, materials={0: look}).render(cam)
+    s, seen_fast = stripe_columns(fast, cam, rod)
+    _, seen_real = stripe_columns(real, cam, rod)
+    assert seen_real[s < 0.25].mean() > 0.95 and seen_real[s > 0.75].mean() < 0.02
+    assert np.mean(seen_fast != seen_real) < 0.05

@@ -105,3 +105,36 @@ def test_fast_renderer_draws_a_skinned_cable():
     # the plugs widen the silhouette beyond the rod's ends
     uv, _ = cam.project(rod.positions[[0, -1]])
     assert xs.min() < uv[0, 0] - 2 and xs.max() > uv[1, 0] + 2
+
+
+def test_fast_renderer_gives_each_part_of_a_cable_asset_its_material():
+    from deformx.visual.camera import Camera
+    from deformx.visual.fast import FastRenderer
+
+    world = dx.World()
+    rod = world.add_rod(dx.Rod.straight(n_elements=12, start=(-0.2, 0, 0.02), direction=(1, 0, 0),
+                                        length=0.4, radius=0.003))
+    world.add_plane()
+    asset = assets.usb_c_cable(length=0.4, radius=0.003, color=(0.9, 0.1, 0.1))
+    r = FastRenderer(world, skins={0: asset.skin(rod)}, shadows=False)
+    m = r.model
+    rod_geoms = [g for g in range(m.ngeom) if m.geom(g).name.startswith("deformx_rod")]
+    assert len(rod_geoms) == len(asset.materials)  # jacket, plug, shell
+    colours = {tuple(np.round(m.mat_rgba[m.geom_matid[g], :3].astype(float), 3).tolist())
+               for g in rod_geoms}
+    assert colours == {tuple(np.round(mat.color, 3).tolist()) for mat in asset.materials.values()}
+    # the parts hold every face once, and all of them are rod 1
+    assert sum(m.mesh_facenum[m.geom_dataid[g]] for g in rod_geoms) == len(asset.faces)
+    cam = Camera(position=(0, -0.5, 0.4), look_at=(0, 0, 0), width=160, height=120)
+    frame = r.render(cam)
+    ys, xs = np.nonzero(frame.instances == 1)
+    uv, _ = cam.project(rod.positions[[0, -1]])
+    assert xs.min() < uv[0, 0] - 2 and xs.max() > uv[1, 0] + 2
+    # red jacket pixels between the rod's ends; the plugs beyond them are not red (a stray
+    # pixel or two at their edges aside)
+    rgb = frame.rgb.astype(int)
+    red = (rgb[..., 0] > 2 * rgb[..., 1]) & (frame.instances == 1)
+    rx = np.nonzero(red)[1]
+    plugs = (xs < uv[0, 0] - 1) | (xs > uv[1, 0] + 1)
+    assert len(rx) > 50 and plugs.sum() > 20
+    assert np.sum((rx < uv[0, 0] - 1) | (rx > uv[1, 0] + 1)) <= 0.1 * plugs.sum()

@@ -104,9 +104,29 @@ class Material(_Model):
         return self
 
 
+UnitFloat = Annotated[float, Field(ge=0.0, le=1.0)]
+Colour = tuple[UnitFloat, UnitFloat, UnitFloat]
+ASSETS = ("usb_c_cable", "ethernet_cable", "twisted_pair", "braided_rope")
+
+
+class Look(_Model):
+    """How a rod is drawn in rendered output (``output.render``): a tube with a colour,
+    surface and texture, or one of the cable assets skinned to it (straight rods only)."""
+
+    color: Colour | None = Field(None, description="RGB 0-1; default: the palette")
+    roughness: UnitFloat = 0.75
+    metallic: UnitFloat = 0.0
+    texture: str | None = Field(None, description="'stripe', 'bands', 'checker' or an image "
+                                "file relative to the scene file")
+    texture_color: Colour = (0.95, 0.95, 0.92)
+    texture_scale: PositiveFloat = Field(0.05, description="m along the wire per repeat")
+    asset: Literal[ASSETS] | None = Field(None, description="a cable model skinned to the rod")
+
+
 class _RodBase(_Model):
     name: str | None = Field(None, description="label used in plots")
     material: Material = Field(default_factory=Material)
+    look: Look | None = Field(None, description="how the rod is drawn (rendered output)")
     fix_start: bool = Field(False, description="clamp position and frame of the first node/element")
     fix_end: bool = Field(False, description="clamp position and frame of the last node/element")
     pinned: list[Annotated[int, Field(ge=0)]] = Field(
@@ -662,7 +682,48 @@ def _frame_recorder(scene: Scene, source):
     c = scene.output.camera
     camera = None if c is None else Camera(position=c.position, look_at=c.look_at, up=c.up,
                                            fov_y=c.fov_y, width=c.width, height=c.height)
-    return FrameRecorder(source, camera=camera, every=scene.output.record_every)
+    materials, skins = _looks(scene, source)
+    return FrameRecorder(source, camera=camera, every=scene.output.record_every,
+                         materials=materials, skins=skins)
+
+
+def _looks(scene: Scene, source) -> tuple[dict, dict]:
+    """Materials and cable-asset skins for the rods whose ``look`` is set (rod index ->)."""
+    from ..visual import assets
+    from ..visual.fast import PALETTE, world_and_sim
+    from ..visual.materials import Material as Surface
+
+    world, _ = world_and_sim(source)
+    materials, skins = {}, {}
+    for i, spec in enumerate(scene.rods):
+        look = spec.look
+        if look is None:
+            continue
+        where = f"rods[{i}].look"
+        color = look.color or PALETTE[i % len(PALETTE)]
+        texture = look.texture
+        if texture is not None and texture not in ("stripe", "bands", "checker"):
+            path = Path(texture)
+            if not path.is_absolute() and scene._base_dir is not None:
+                path = scene._base_dir / path
+            if not path.is_file():
+                raise ValueError(f"{where}.texture: no image file {path}")
+            texture = str(path)
+        materials[i] = Surface(tuple(color), look.roughness, look.metallic, texture,
+                               tuple(look.texture_color), look.texture_scale)
+        if look.asset is not None:
+            rod = world.rods[i]
+            if not isinstance(spec, StraightRod):
+                raise ValueError(f"{where}.asset: cable assets bind to straight rods")
+            radius = float(rod.node_radius[0])
+            if look.asset == "twisted_pair":
+                asset = assets.twisted_pair(rod.length, radius=radius / 2.0,
+                                            colors=(tuple(color), tuple(look.texture_color)))
+            else:
+                asset = getattr(assets, look.asset)(rod.length, radius=radius,
+                                                    color=tuple(color))
+            skins[i] = asset.skin(rod)
+    return materials, skins
 
 
 def _ground_z(scene: Scene) -> float | None:

@@ -13,17 +13,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .materials import Material
+
 #: The authors' dataset used radii of 1, 3 and 5 mm, twelve colours and roughness 0.75.
 RADII = (0.001, 0.003, 0.005)
-
-
-@dataclass
-class Material:
-    """Base colour (RGB 0-1), roughness and metallic (0-1), as in glTF / Blender's BSDF."""
-
-    color: tuple = (0.08, 0.08, 0.09)
-    roughness: float = 0.75
-    metallic: float = 0.0
 
 
 @dataclass

@@ -24,6 +24,7 @@ import mujoco  # noqa: E402
 
 from .camera import Camera  # noqa: E402
 from .frame import Frame  # noqa: E402
+from .materials import Material, texture_image  # noqa: E402
 from .tube import Tube  # noqa: E402
 
 
@@ -122,12 +123,14 @@ class FastRenderer:
     MuJoCo's default 4096 costs ~0.25 s a frame on a CPU); ``colors``: one RGB per rod
     (default :data:`PALETTE`); ``samples``: multisampling of the RGB pass; ``skins``: rod
     index -> :class:`~deformx.visual.skin.Skin` (e.g. ``assets.usb_c_cable(...).skin(rod)``)
-    drawn instead of that rod's tube.
+    drawn instead of that rod's tube, one material per part of a cable asset; ``materials``:
+    rod index -> :class:`~deformx.visual.materials.Material` (colour, roughness, texture),
+    overriding ``colors``.
     """
 
     def __init__(self, source: Any, sides: int = 12, shadows: bool = True,
                  shadow_size: int = 1024, colors: Any = None, samples: int = 4,
-                 skins: dict | None = None) -> None:
+                 skins: dict | None = None, materials: Any = None) -> None:
         world, sim = world_and_sim(source)
         self.world, self.sim = world, sim
         self.samples = int(samples)
@@ -153,15 +156,29 @@ class FastRenderer:
         skins = skins or {}
         self.tubes = [skins[i] if i in skins else Tube(rod, sides=sides)
                       for i, rod in enumerate(world.rods)]
-        palette = PALETTE if colors is None else [tuple(c) for c in colors]
+        self.materials = rod_materials(len(self.tubes), colors, materials)
+        self._rod_geoms: list[list[str]] = []  # per rod: its geoms (one per part)
+        parts: list[tuple] = []  # (drawable, geom name, vertex subset or None)
         for i, tube in enumerate(self.tubes):
-            spec.add_mesh(name=f"deformx_rod{i}", uservert=tube.vertices.ravel().tolist(),
-                          userface=tube.faces.ravel().tolist(),
-                          usernormal=tube.normals.ravel().tolist())
-            c = palette[i % len(palette)]
-            spec.worldbody.add_geom(name=f"deformx_rod{i}", type=mujoco.mjtGeom.mjGEOM_MESH,
-                                    meshname=f"deformx_rod{i}", rgba=[*c, 1.0], contype=0,
-                                    conaffinity=0)
+            names = []
+            for k, (mat, faces, subset) in enumerate(_mesh_parts(tube, self.materials[i])):
+                name = f"deformx_rod{i}" + (f"_{k}" if k else "")
+                V = tube.vertices if subset is None else tube.vertices[subset]
+                N = tube.normals if subset is None else tube.normals[subset]
+                mesh = dict(name=name, uservert=V.ravel().tolist(),
+                            userface=faces.ravel().tolist(), usernormal=N.ravel().tolist())
+                texture = texture_image(mat) if isinstance(tube, Tube) else None
+                if texture is not None:
+                    uv = tube.uv / np.array([mat.texture_scale, 1.0])
+                    mesh["usertexcoord"] = uv.ravel().tolist()
+                spec.add_mesh(**mesh)
+                _add_material(spec, name, mat, texture)
+                spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH,
+                                        meshname=name, material=name, contype=0,
+                                        conaffinity=0)
+                names.append(name)
+                parts.append((tube, name, subset))
+            self._rod_geoms.append(names)
             ids.append({"id": len(ids) + 1, "kind": "rod", "name": f"rod {i}"})
         # colliders standing for co-simulated bodies are drawn by MuJoCo's own geoms
         from_bodies, body_planes = drawn_by_bodies(sim)
@@ -198,7 +215,8 @@ class FastRenderer:
         self.data = mujoco.MjData(self.model)
         self._geom_instance = self._instances(ids, sim)
         self.ids = ids
-        self._rod_mesh = [self.model.mesh(f"deformx_rod{i}").id for i in range(len(self.tubes))]
+        self._rod_mesh = [(tube, self.model.mesh(name).id, subset)
+                          for tube, name, subset in parts]
         self._mocap = [self.model.body(f"deformx_collider{k}").mocapid[0]
                        for k in range(len(self._colliders))]
         self._camera_id = self.model.camera("deformx_camera").id
@@ -230,12 +248,9 @@ class FastRenderer:
         for entry in ids:
             kind, rest = entry["kind"], entry["name"]
             by_name[(kind, rest)] = entry["id"]
-        for g in range(m.ngeom):
-            name = m.geom(g).name
-            if name.startswith("deformx_rod"):
-                out[g] = int(name[len("deformx_rod"):]) + 1
-            elif name.startswith("deformx_collider") or name.startswith("deformx_plane"):
-                pass  # below, in order
+        for i, names in enumerate(self._rod_geoms):
+            for name in names:
+                out[m.geom(name).id] = i + 1
         n_rods = len(self.tubes)
         k = n_rods
         for j in range(len(self._colliders)):
@@ -278,7 +293,8 @@ class FastRenderer:
         id pass only: wires thinner than 1.5 px are drawn 1.5 px wide, so that a wire down to
         a pixel still gets a mask (depth there is off by less than a pixel's footprint)."""
         m = self.model
-        for tube, mid in zip(self.tubes, self._rod_mesh):
+        updated = set()
+        for tube, mid, subset in self._rod_mesh:
             radius = None
             if camera is not None and not isinstance(tube, Tube):
                 continue  # skinned meshes are drawn as they are
@@ -288,14 +304,18 @@ class FastRenderer:
                 if np.all(tube.radius >= floor):
                     continue
                 radius = np.maximum(tube.radius, floor)
-            tube.update() if radius is None else tube.update(radius)
+            if id(tube) not in updated:  # a skin's parts share one update
+                tube.update() if radius is None else tube.update(radius)
+                updated.add(id(tube))
+            V = tube.vertices if subset is None else tube.vertices[subset]
+            N = tube.normals if subset is None else tube.normals[subset]
             R = np.zeros(9)
             mujoco.mju_quat2Mat(R, m.mesh_quat[mid])
             R = R.reshape(3, 3)
             v0, nv = m.mesh_vertadr[mid], m.mesh_vertnum[mid]
-            m.mesh_vert[v0:v0 + nv] = (tube.vertices - m.mesh_pos[mid]) @ R
+            m.mesh_vert[v0:v0 + nv] = (V - m.mesh_pos[mid]) @ R
             n0 = m.mesh_normaladr[mid]
-            m.mesh_normal[n0:n0 + nv] = tube.normals @ R
+            m.mesh_normal[n0:n0 + nv] = N @ R
             for kind, p in self._passes.items():
                 if camera is None or kind == "ids":
                     p.upload(m, mid)
@@ -308,7 +328,7 @@ class FastRenderer:
             p = _Pass(self.model, camera.width, camera.height,
                       self.samples if kind == "rgb" else 0)
             self._passes[kind] = p
-            for mid in self._rod_mesh:
+            for _, mid, _ in self._rod_mesh:
                 p.upload(self.model, mid)
         return p
 
@@ -385,10 +405,10 @@ class FastRenderer:
         keep = rgba[:, 3].copy()
         out = {}
         try:
-            for i in range(len(self.tubes)):
-                gid = self.model.geom(f"deformx_rod{i}").id
+            for i, names in enumerate(self._rod_geoms):
+                gids = [self.model.geom(name).id for name in names]
                 rgba[:, 3] = 0.0
-                rgba[gid, 3] = keep[gid]
+                rgba[gids, 3] = keep[gids]
                 self._update_scene(camera)
                 ids, _ = self._id_pass(camera, want_depth=False)
                 out[i + 1] = ids == i + 1
@@ -408,6 +428,54 @@ class FastRenderer:
             self.close()
         except Exception:
             pass
+
+
+def rod_materials(n: int, colors: Any = None, materials: Any = None) -> list[Material]:
+    """One :class:`Material` per rod: ``materials`` (rod index -> Material, or a list) where
+    given, else the rod's colour from ``colors`` (default :data:`PALETTE`)."""
+    palette = PALETTE if colors is None else [tuple(c) for c in colors]
+    if materials is None:
+        materials = {}
+    elif not isinstance(materials, dict):
+        materials = dict(enumerate(materials))
+    out = []
+    for i in range(n):
+        m = materials.get(i)
+        if m is not None and not isinstance(m, Material):
+            raise ValueError(f"materials[{i}] must be a deformx.visual.materials.Material, got "
+                             f"{type(m).__name__}")
+        out.append(m if m is not None else Material(tuple(palette[i % len(palette)])))
+    return out
+
+
+def _mesh_parts(drawable, material: Material) -> list[tuple]:
+    """(material, faces, vertex subset or None) per part: a cable asset's skin has one per
+    material (jacket, plug, ...), everything else one."""
+    parts = getattr(drawable, "materials", None)
+    part = getattr(drawable, "part", None)
+    if not parts or part is None:
+        return [(material, drawable.faces, None)]
+    out = []
+    for k, mat in enumerate(parts):
+        F = drawable.faces[np.asarray(part) == k]
+        if not len(F):
+            continue
+        subset, local = np.unique(F, return_inverse=True)
+        out.append((mat, local.reshape(F.shape), subset))
+    return out
+
+
+def _add_material(spec, name: str, material: Material, texture: np.ndarray | None) -> None:
+    """A MuJoCo material for ``material``: Phong specular and shininess from roughness."""
+    kw = dict(name=name, rgba=[*material.color, 1.0],
+              specular=0.5 * (1.0 - material.roughness) + 0.3 * material.metallic,
+              shininess=1.0 - material.roughness, reflectance=0.0)
+    if texture is not None:
+        t = spec.add_texture(name=name, type=mujoco.mjtTexture.mjTEXTURE_2D,
+                             width=texture.shape[1], height=texture.shape[0], nchannel=3)
+        t.data = np.ascontiguousarray(texture).tobytes()
+        kw.update(textures=["", name], rgba=[1.0, 1.0, 1.0, 1.0])
+    spec.add_material(**kw)
 
 
 def _frame_z(normal: np.ndarray) -> np.ndarray:

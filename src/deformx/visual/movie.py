@@ -35,13 +35,15 @@ class FrameRecorder:
     """A callback (``every`` s) that renders ``source`` (a world or co-simulation) with
     :class:`~deformx.visual.fast.FastRenderer` and keeps the RGB frames; :meth:`finish`
     writes ``{name}.mp4``, ``{name}.png`` (a contact sheet) and ``frames/`` (the last
-    frame's rgb, depth, instances, camera.json)."""
+    frame's rgb, depth, instances, camera.json); ``materials`` and ``skins`` as for the
+    renderer."""
 
     def __init__(self, source: Any, camera: Camera | None = None, every: float = 1 / 30,
-                 shadows: bool = True) -> None:
+                 shadows: bool = True, materials: Any = None, skins: dict | None = None
+                 ) -> None:
         from .fast import FastRenderer
 
-        self.renderer = FastRenderer(source, shadows=shadows)
+        self.renderer = FastRenderer(source, shadows=shadows, materials=materials, skins=skins)
         world = self.renderer.world
         self.camera = camera or auto_camera(world)
         self.every = every

@@ -24,8 +24,9 @@ import numpy as np
 
 from .camera import Camera
 from .export import _collider_mesh, _drawables
-from .fast import COLLIDER_COLORS, PALETTE, _frame_z, drawn_by_bodies, world_and_sim
+from .fast import COLLIDER_COLORS, _frame_z, drawn_by_bodies, rod_materials, world_and_sim
 from .frame import Frame
+from .materials import texture_image
 
 _BACKGROUND_DEPTH = 1e9  # Blender writes 1e10 where a ray hits nothing
 
@@ -59,6 +60,23 @@ def _bpy():
     return bpy
 
 
+def _texture(bpy, mat, image: np.ndarray, name: str) -> None:
+    """Base colour from ``image`` (rows round the wire from t = 0, columns along it) through
+    the mesh's UV map; the image repeats along the wire."""
+    H, W = image.shape[:2]
+    img = bpy.data.images.new(name, W, H)
+    rgba = np.ones((H, W, 4), dtype=np.float32)
+    rgba[..., :3] = (image / 255.0) ** 2.2  # sRGB bytes -> linear (close enough for albedo)
+    img.pixels.foreach_set(rgba.ravel())  # Blender's first row is the bottom: t = 0
+    img.pack()
+    nodes = mat.node_tree.nodes
+    tex = nodes.new("ShaderNodeTexImage")
+    tex.image = img
+    tex.extension = "REPEAT"
+    mat.node_tree.links.new(tex.outputs["Color"], nodes.get("Principled BSDF").inputs[
+        "Base Color"])
+
+
 def _material(bpy, name: str, color, roughness: float = 0.75, metallic: float = 0.0,
               checker: bool = False):
     mat = bpy.data.materials.new(name)
@@ -83,13 +101,14 @@ class PhotorealRenderer:
     its MuJoCo geoms) with Cycles.
 
     ``samples`` per pixel, ``denoise`` (OpenImageDenoise), ``max_bounces``, ``sides`` of the
-    tubes, ``skins`` (rod index -> Skin) and ``colors`` as for the fast renderer; ``threads``
-    (default: all cores).
+    tubes, ``skins`` (rod index -> Skin), ``colors`` and ``materials`` (rod index ->
+    Material, textures included) as for the fast renderer; ``threads`` (default: all cores).
     """
 
     def __init__(self, source: Any, samples: int = 32, denoise: bool = True,
                  max_bounces: int = 6, sides: int = 16, skins: dict | None = None,
-                 colors: Any = None, threads: int | None = None) -> None:
+                 colors: Any = None, threads: int | None = None,
+                 materials: Any = None) -> None:
         world, sim = world_and_sim(source)
         self.sim = sim
         bpy = self.bpy = _bpy()
@@ -135,13 +154,22 @@ class PhotorealRenderer:
         s.camera = self.camera_obj
         # rods, colliders, planes: pass indices = instance ids, in the fast renderer's order
         self.meshes = _drawables(world, sides, skins)
-        palette = PALETTE if colors is None else [tuple(c) for c in colors]
+        self.materials = rod_materials(len(self.meshes), colors, materials)
         self.ids: list[dict] = []
         self._rod_data = []
         for i, m in enumerate(self.meshes):
             m.update()
-            obj = self._mesh_object(f"rod_{i}", m.vertices, m.faces,
-                                    _material(bpy, f"rod_{i}", palette[i % len(palette)]))
+            look = self.materials[i]
+            mat = _material(bpy, f"rod_{i}", look.color, look.roughness, look.metallic)
+            obj = self._mesh_object(f"rod_{i}", m.vertices, m.faces, mat)
+            image = texture_image(look) if hasattr(m, "uv") else None
+            if image is not None:
+                uv = m.uv / np.array([look.texture_scale, 1.0])
+                layer = obj.data.uv_layers.new(name="UVMap")
+                loops = np.empty(len(obj.data.loops), dtype=np.int64)
+                obj.data.loops.foreach_get("vertex_index", loops)
+                layer.data.foreach_set("uv", uv[loops].astype(np.float32).ravel())
+                _texture(bpy, mat, image, f"rod_{i}_texture")
             parts = getattr(m, "materials", None)
             if parts:  # a cable asset: one material per part (jacket, plug, shell, ...)
                 obj.data.materials.clear()

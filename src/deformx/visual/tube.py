@@ -4,8 +4,9 @@ twist turns the rings), smooth normals, arc-length UVs, end caps. The topology i
 
 Node frames: the element frame at the ends, between elements the mean of the two elements'
 d1 made normal to the mean tangent (d3), d2 = d3 x d1. Ring vertex j of node i is
-``x_i + r_i (cos t_j d1 + sin t_j d2)``, ``t_j = 2 pi j / sides``; caps add one centre vertex
-per open end.
+``x_i + r_i (cos t_j d1 + sin t_j d2)``, ``t_j = 2 pi j / sides``, j = 0..sides: the last vertex
+repeats the first at texture coordinate t = 1 (a seam, so that a texture does not wrap backwards
+across one face); caps add one centre vertex per open end.
 """
 
 from __future__ import annotations
@@ -18,8 +19,8 @@ from numba import njit
 def tube_vertices(pos, Q, radius, closed, cos_t, sin_t, verts, normals) -> None:
     """Ring vertices and normals of a tube around nodes ``pos`` (N, 3) with element frames
     ``Q`` (E, 3, 3), rows d1, d2, d3), node radii ``radius`` (N), ring angles given by their
-    ``cos_t`` / ``sin_t`` (sides); ``verts`` / ``normals`` ((N sides + caps), 3) are written in
-    place (caps: the two end centres, open rods)."""
+    ``cos_t`` / ``sin_t`` (ring vertices); ``verts`` / ``normals`` ((N ring + caps), 3) are
+    written in place (caps: the two end centres, open rods)."""
     sides = cos_t.shape[0]
     n = pos.shape[0]
     ne = Q.shape[0]
@@ -60,20 +61,21 @@ def tube_vertices(pos, Q, radius, closed, cos_t, sin_t, verts, normals) -> None:
 
 
 def tube_faces(n_nodes: int, sides: int, closed: bool) -> np.ndarray:
-    """Triangles (F, 3) of the tube: two per quad between rings (outward, counter-clockwise
-    seen from outside), a fan per cap."""
+    """Triangles (F, 3) of the tube (rings of ``sides + 1`` vertices, the last on the seam):
+    two per quad between rings (outward, counter-clockwise seen from outside), a fan per cap."""
     rings = n_nodes if closed else n_nodes - 1
+    ring = sides + 1
     faces = []
     j = np.arange(sides)
-    jn = (j + 1) % sides
+    jn = j + 1
     for i in range(rings):
-        a = i * sides
-        b = ((i + 1) % n_nodes) * sides
+        a = i * ring
+        b = ((i + 1) % n_nodes) * ring
         faces.append(np.column_stack([a + j, a + jn, b + j]))
         faces.append(np.column_stack([a + jn, b + jn, b + j]))
     if not closed:
-        c0, c1 = n_nodes * sides, n_nodes * sides + 1
-        last = (n_nodes - 1) * sides
+        c0, c1 = n_nodes * ring, n_nodes * ring + 1
+        last = (n_nodes - 1) * ring
         # ring angles turn from d1 to d2, i.e. counter-clockwise about d3: the start cap faces -d3
         faces.append(np.column_stack([np.full(sides, c0), jn, j]))
         faces.append(np.column_stack([np.full(sides, c1), last + j, last + jn]))
@@ -83,7 +85,8 @@ def tube_faces(n_nodes: int, sides: int, closed: bool) -> np.ndarray:
 class Tube:
     """The tube mesh of one rod: ``faces`` fixed, ``vertices`` / ``normals`` refreshed by
     :meth:`update` from the rod's current nodes and frames; ``uv``: u = rest arc length (m),
-    v = angle / 2 pi."""
+    v = angle from d1 / 2 pi (0..1, a seam vertex at 1); ``ring`` = sides + 1 vertices per
+    node."""
 
     def __init__(self, rod, sides: int = 12, radius_scale: float = 1.0) -> None:
         if not isinstance(sides, (int, np.integer)) or sides < 3:
@@ -93,18 +96,20 @@ class Tube:
         self.closed = bool(rod.closed)
         n = rod.n_nodes
         self.radius = np.asarray(rod.node_radius, dtype=np.float64) * radius_scale
+        self.ring = self.sides + 1
         self.faces = tube_faces(n, self.sides, self.closed)
-        n_verts = n * self.sides + (0 if self.closed else 2)
+        n_verts = n * self.ring + (0 if self.closed else 2)
         self.vertices = np.zeros((n_verts, 3))
         self.normals = np.zeros((n_verts, 3))
         s = np.concatenate([[0.0], np.cumsum(rod.rest_lengths)])[:n]
         uv = np.zeros((n_verts, 2))
-        uv[: n * self.sides, 0] = np.repeat(s, self.sides)
-        uv[: n * self.sides, 1] = np.tile(np.arange(self.sides) / self.sides, n)
+        uv[: n * self.ring, 0] = np.repeat(s, self.ring)
+        uv[: n * self.ring, 1] = np.tile(np.arange(self.ring) / self.sides, n)
         if not self.closed:
             uv[-1, 0] = s[-1]
+            uv[-2:, 1] = 0.5
         self.uv = uv
-        angle = 2.0 * np.pi * np.arange(self.sides) / self.sides
+        angle = 2.0 * np.pi * np.arange(self.ring) / self.sides
         self._cos, self._sin = np.cos(angle), np.sin(angle)
         self.update()
 
