@@ -92,8 +92,8 @@ def main() -> None:
             f"{c} {per_step[c][-1] * 1e6:.1f}" for c in CASES) + " us/step")
 
     def span(values, scale, fmt):
-        lo, hi = min(values) * scale, max(values) * scale
-        return f"{lo:{fmt}}" if len(values) == 1 else f"{lo:{fmt}}-{hi:{fmt}}"
+        lo, hi = f"{min(values) * scale:{fmt}}", f"{max(values) * scale:{fmt}}"
+        return lo if lo == hi else f"{lo}-{hi}"
 
     nodes = N_RODS * (N_EL + 1)
     plane = per_step["plane"]

@@ -492,6 +492,7 @@ class World:
         self._drivers.rows[:] = state.drivers
         self._pairs = state.pairs.copy()
         self.time = float(state.time)
+        self._rods_p["status"][:, 0] = 0  # a diverged world is usable again once restored
 
     def _rod_state(self, rod: Rod) -> dict:
         self._ready()
@@ -514,6 +515,7 @@ class World:
         for c in rod._clamps:
             if c.node in state.get("drivers", {}):
                 c._row[:] = state["drivers"][c.node]
+        self._rods_p["status"][rod._index, 0] = 0  # usable again after a divergence
         self._rods_p["pair_state"][1] = 0  # positions jumped: rebuild the rod-rod pair list
 
     # ------------------------------------------------------------------ diagnostics

@@ -1,0 +1,144 @@
+"""The hit-target environment (deformx.learn): Gymnasium's checker, the observation layout,
+actions that move only the active joints, determinism, the reward's terms, both ropes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+gym = pytest.importorskip("gymnasium")
+
+import deformx.learn  # noqa: E402,F401  (registers deformx/HitTarget-v0)
+from deformx.learn import HitTargetConfig, HitTargetEnv  # noqa: E402
+
+SHORT = dict(settle_time=0.2, episode_steps=60)
+
+
+@pytest.fixture(scope="module")
+def env():
+    e = HitTargetEnv(target=(0.0, 2.0, 1.5), **SHORT)
+    yield e
+    e.close()
+
+
+def test_gymnasium_checker_passes_and_make_uses_the_registered_id():
+    from gymnasium.utils.env_checker import check_env
+
+    made = gym.make("deformx/HitTarget-v0", target=(0.0, 1.7, 0.5), **SHORT)
+    assert made.unwrapped.config.target == (0.0, 1.7, 0.5)
+    check_env(made.unwrapped, skip_render_check=True)
+    made.close()
+
+
+def test_observation_layout(env):
+    obs, info = env.reset(seed=1)
+    assert obs.shape == (18,) and obs.dtype == np.float32
+    d = env.backend.data
+    act = [env.backend.model.joint(n).qposadr[0] for n in
+           ("shoulder_lift_joint", "elbow_joint", "wrist_1_joint")]
+    np.testing.assert_allclose(obs[0:3], d.qpos[act], atol=1e-6)
+    np.testing.assert_allclose(obs[6:9], env.rod.positions[-1], atol=1e-6)
+    np.testing.assert_allclose(obs[9:12], env.rod.velocities[-1], atol=1e-6)
+    np.testing.assert_allclose(obs[12:15], d.xpos[env.backend.body_id("tool_tip")], atol=1e-6)
+    np.testing.assert_allclose(obs[15:18], (0.0, 2.0, 1.5))
+    # the rope hangs from the stick's tip
+    assert np.linalg.norm(env.rod.positions[0] - obs[12:15]) < 1e-3
+    # d is the distance in the swing plane (y-z)
+    tip = env.rod.positions[-1]
+    assert info["d"] == pytest.approx(math.hypot(tip[1] - 2.0, tip[2] - 1.5))
+
+
+def test_actions_move_only_the_active_joints_and_only_forwards(env):
+    env.reset(seed=0)
+    m, d = env.backend.model, env.backend.data
+    adr = [m.joint(n).qposadr[0] for n in deformx.robots.JOINTS]
+    q0 = np.array(env.config.q0)
+    for _ in range(20):
+        _, _, term, trunc, info = env.step(-np.ones(3))  # negative: clipped to no motion
+    np.testing.assert_array_equal(info["joint_targets"], q0)
+    for _ in range(30):
+        _, _, term, trunc, info = env.step(np.array([1.0, 1.0, 0.0]))
+    targets = info["joint_targets"]
+    active = list(env.config.active_joints)
+    inactive = [j for j in range(6) if j not in active]
+    np.testing.assert_array_equal(targets[inactive], q0[inactive])
+    step = env.config.step_limit
+    assert step == pytest.approx(0.00942, abs=5e-5)
+    # each commanded target moved by 30 full steps, or stopped at its task limit
+    upper = np.array(env.config.upper_limits)
+    np.testing.assert_allclose(targets[active], np.minimum(
+        q0[active] + 30 * step * np.array([1.0, 1.0, 0.0]), upper))
+    q = d.qpos[adr]
+    assert np.all(np.abs(q[inactive] - q0[inactive]) < 0.02)  # held by their servos
+    assert q[2] - q0[2] > 0.1  # the elbow follows its target (torque-limited servo)
+
+
+def test_same_seed_same_episode_bit_for_bit():
+    def rollout(e, seed):
+        obs, _ = e.reset(seed=seed)
+        rng = np.random.default_rng(seed)
+        out = [obs]
+        for _ in range(40):
+            obs, r, term, trunc, _ = e.step(rng.uniform(-1, 1, 3).astype(np.float32))
+            out.append(np.append(obs, r))
+        return np.concatenate(out)
+
+    a = HitTargetEnv(**SHORT)
+    b = HitTargetEnv(**SHORT)
+    first = rollout(a, 7)
+    np.testing.assert_array_equal(first, rollout(b, 7))
+    np.testing.assert_array_equal(first, rollout(a, 7))  # after a reset of a used env
+
+
+def test_reward_terms_follow_the_task():
+    """Progress, new best, one-off bonuses, success; velocity, time and action terms."""
+    e = HitTargetEnv(**SHORT)
+    e.reset(seed=0)
+    cfg = e.config
+    e.backend.data.qvel[:] = 0.0
+    still = np.zeros(3)
+    tip = np.array([0.0, 2.0, 2.3 + 0.6])  # 0.6 m above the target, at rest
+    e._d, e._d_min = 0.7, 0.7
+    r = e._reward(0.6, tip, still, np.zeros(3))
+    assert r == pytest.approx(math.exp(-0.6) + 10 * 0.1 + 30 * 0.1 - 0.05)
+    # crossing 0.5 m pays its bonus once
+    e._d = 0.6
+    r1 = e._reward(0.45, tip, still, np.zeros(3))
+    e._d = 0.45
+    r2 = e._reward(0.45, tip, still, np.zeros(3))
+    assert r1 - r2 == pytest.approx(10 * 0.15 + 30 * 0.15 + 1.0)
+    # success (and the 3 cm touch) pay 50 + 50 and the remaining bonuses 3 + 5 + 10
+    e._d = 0.45
+    r = e._reward(0.02, tip, still, np.zeros(3))
+    expected = (math.exp(-0.02) + 10 * 0.43 + 30 * 0.43 + 3 + 5 + 10 + 50 + 50 - 0.05)
+    assert r == pytest.approx(min(expected, cfg.reward_range[1]))
+    # tip velocity towards the target, action and smoothness penalties
+    e._d, e._d_min = 0.6, 0.0
+    e._a_prev = np.zeros(3)
+    v = np.array([0.0, 0.0, -2.0])  # straight down, towards the target below
+    a = np.array([1.0, 0.0, 0.5])
+    r = e._reward(0.6, tip, v, a)
+    assert r == pytest.approx(math.exp(-0.6) + 2.0 - 0.05 - 0.05 * 1.25 - 0.02 * 1.25)
+
+
+def test_the_capsule_rope_runs_the_same_task():
+    e = HitTargetEnv(rope="capsule", **SHORT)
+    obs, _ = e.reset(seed=0)
+    assert np.all(np.isfinite(obs))
+    np.testing.assert_allclose(obs[6:9], e.rope.tip_position, atol=1e-6)
+    for _ in range(20):
+        obs, r, term, trunc, info = e.step(np.ones(3))
+    assert np.all(np.isfinite(obs)) and not info["diverged"]
+
+
+def test_bad_parameters_name_themselves():
+    with pytest.raises(ValueError, match="rope must be"):
+        HitTargetEnv(rope="chain")
+    with pytest.raises(ValueError, match="unknown HitTarget parameter"):
+        HitTargetEnv(youngs=1.0)
+    with pytest.raises(ValueError, match="rope_dt"):
+        HitTargetConfig(rope_dt=3e-4)
+    with pytest.raises(ValueError, match="target"):
+        HitTargetConfig(target=(0.0, 1.0))
