@@ -36,12 +36,12 @@ def test_observation_layout(env):
     obs, info = env.reset(seed=1)
     assert obs.shape == (18,) and obs.dtype == np.float32
     d = env.backend.data
-    act = [env.backend.model.joint(n).qposadr[0] for n in
+    act = [env.backend.model.joint(f"e0_{n}").qposadr[0] for n in
            ("shoulder_lift_joint", "elbow_joint", "wrist_1_joint")]
     np.testing.assert_allclose(obs[0:3], d.qpos[act], atol=1e-6)
     np.testing.assert_allclose(obs[6:9], env.rod.positions[-1], atol=1e-6)
     np.testing.assert_allclose(obs[9:12], env.rod.velocities[-1], atol=1e-6)
-    np.testing.assert_allclose(obs[12:15], d.xpos[env.backend.body_id("tool_tip")], atol=1e-6)
+    np.testing.assert_allclose(obs[12:15], d.xpos[env.backend.body_id("e0_tool_tip")], atol=1e-6)
     np.testing.assert_allclose(obs[15:18], (0.0, 2.0, 1.5))
     # the rope hangs from the stick's tip
     assert np.linalg.norm(env.rod.positions[0] - obs[12:15]) < 1e-3
@@ -53,7 +53,7 @@ def test_observation_layout(env):
 def test_actions_move_only_the_active_joints_and_only_forwards(env):
     env.reset(seed=0)
     m, d = env.backend.model, env.backend.data
-    adr = [m.joint(n).qposadr[0] for n in deformx.robots.JOINTS]
+    adr = [m.joint(f"e0_{n}").qposadr[0] for n in deformx.robots.JOINTS]
     q0 = np.array(env.config.q0)
     for _ in range(20):
         _, _, term, trunc, info = env.step(-np.ones(3))  # negative: clipped to no motion
@@ -97,26 +97,27 @@ def test_reward_terms_follow_the_task():
     e = HitTargetEnv(**SHORT)
     e.reset(seed=0)
     cfg = e.config
+    b = e.batch
     e.backend.data.qvel[:] = 0.0
     still = np.zeros(3)
     tip = np.array([0.0, 2.0, 2.3 + 0.6])  # 0.6 m above the target, at rest
-    e._d, e._d_min = 0.7, 0.7
+    b.d[0], b.d_min[0] = 0.7, 0.7
     r = e._reward(0.6, tip, still, np.zeros(3))
     assert r == pytest.approx(math.exp(-0.6) + 10 * 0.1 + 30 * 0.1 - 0.05)
     # crossing 0.5 m pays its bonus once
-    e._d = 0.6
+    b.d[0] = 0.6
     r1 = e._reward(0.45, tip, still, np.zeros(3))
-    e._d = 0.45
+    b.d[0] = 0.45
     r2 = e._reward(0.45, tip, still, np.zeros(3))
     assert r1 - r2 == pytest.approx(10 * 0.15 + 30 * 0.15 + 1.0)
     # success (and the 3 cm touch) pay 50 + 50 and the remaining bonuses 3 + 5 + 10
-    e._d = 0.45
+    b.d[0] = 0.45
     r = e._reward(0.02, tip, still, np.zeros(3))
     expected = (math.exp(-0.02) + 10 * 0.43 + 30 * 0.43 + 3 + 5 + 10 + 50 + 50 - 0.05)
     assert r == pytest.approx(min(expected, cfg.reward_range[1]))
     # tip velocity towards the target, action and smoothness penalties
-    e._d, e._d_min = 0.6, 0.0
-    e._a_prev = np.zeros(3)
+    b.d[0], b.d_min[0] = 0.6, 0.0
+    b.a_prev[0] = 0.0
     v = np.array([0.0, 0.0, -2.0])  # straight down, towards the target below
     a = np.array([1.0, 0.0, 0.5])
     r = e._reward(0.6, tip, v, a)
@@ -142,3 +143,43 @@ def test_bad_parameters_name_themselves():
         HitTargetConfig(rope_dt=3e-4)
     with pytest.raises(ValueError, match="target"):
         HitTargetConfig(target=(0.0, 1.0))
+
+
+def test_vector_env_members_are_independent_and_match_the_single_env():
+    """make_vec's batch (one MuJoCo model, one world): a member follows the single
+    environment under the same actions, and resetting one member leaves the others as they
+    would have been; autoreset hands back the final observation."""
+    kw = dict(SHORT, episode_steps=25)
+    a = gym.make_vec("deformx/HitTarget-v0", num_envs=3, vectorization_mode="vector_entry_point",
+                     **kw)
+    b = gym.make_vec("deformx/HitTarget-v0", num_envs=3, vectorization_mode="vector_entry_point",
+                     **kw)
+    single = HitTargetEnv(**kw)
+    assert a.observation_space.shape == (3, 18) and a.action_space.shape == (3, 3)
+    oa, _ = a.reset(seed=0)
+    ob, _ = b.reset(seed=0)
+    os_, _ = single.reset(seed=0)
+    np.testing.assert_array_equal(oa, ob)
+    np.testing.assert_allclose(oa[1], os_, atol=1e-6)  # each member in its own frame
+    rng = np.random.default_rng(3)
+    for k in range(30):
+        act = rng.uniform(-1, 1, (3, 3)).astype(np.float32)
+        if k == 10:
+            oa, _ = a.reset(options={"reset_mask": np.array([False, True, False])})
+            np.testing.assert_allclose(oa[1], os_first := single.reset(seed=0)[0], atol=1e-6)
+        oa, ra, ta, tra, ia = a.step(act)
+        ob, rb, tb, trb, ib = b.step(act)
+        if k < 10:
+            o1, r1, *_ = single.step(act[1])
+            np.testing.assert_allclose(oa[1], o1, atol=1e-6)
+            assert ra[1] == pytest.approx(r1, abs=1e-6)
+        keep = [0, 2]
+        np.testing.assert_array_equal(oa[keep], ob[keep])
+        np.testing.assert_array_equal(ra[keep], rb[keep])
+        if k == 24:  # 25 steps: every member's episode ran out (truncated), and was reset
+            assert tra[0] and tra[2] and not tra[1]
+            assert ia["_final_obs"][0] and ia["final_obs"][0].shape == (18,)
+            assert ia["final_info"]["d_min"][0] > 0
+            np.testing.assert_allclose(oa[0], os_first, atol=1e-6)  # a fresh episode
+    a.close()
+    b.close()

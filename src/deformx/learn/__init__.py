@@ -7,6 +7,8 @@ Gymnasium environments.
     import deformx.learn  # noqa: F401  (or gym.register_envs(deformx.learn))
 
     env = gym.make("deformx/HitTarget-v0", target=(0.0, 2.0, 1.5), rope="cosserat")
+    envs = gym.make_vec("deformx/HitTarget-v0", num_envs=64,
+                        vectorization_mode="vector_entry_point")  # one world, one model
 
 See ``docs/learning.md``.
 """
@@ -15,10 +17,11 @@ from __future__ import annotations
 
 import gymnasium as _gym
 
-from .hit_target import HitTargetConfig, HitTargetEnv
+from .hit_target import HitTargetEnv
+from .task import HitTargetConfig
 
 __all__ = ["HitTargetConfig", "HitTargetEnv"]
 
 if "deformx/HitTarget-v0" not in _gym.registry:
     _gym.register(id="deformx/HitTarget-v0", entry_point="deformx.learn.hit_target:HitTargetEnv",
-                  disable_env_checker=False)
+                  vector_entry_point="deformx.learn.vector:HitTargetVecEnv")

@@ -1,0 +1,330 @@
+"""``n`` copies of the hit-target task stepped together: one MuJoCo model holding ``n`` arms
+(env ``i``'s frame shifted by ``i * spacing`` along x, out of the swing plane, so the copies
+never meet), one DeformX world holding the ``n`` ropes (one kernel call steps them all) and one
+co-simulation coupling them. The single environment is a batch of one; the vector
+environment a batch of ``num_envs``.
+
+Per-environment resets restore that copy's settled state: its arm's joints (and capsule
+chain) in MuJoCo and its rope through the engine's per-rod state. A rope that diverges during
+a step (a fold of more than 170 deg, see ``docs/learning.md``) rolls the whole step back, ends
+that copy's episode (``diverged``), resets it, and the others step on.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .task import HitTargetConfig, initial_rope, rot_x
+
+
+class HitTargetBatch:
+    """The task's physics and episode bookkeeping for ``n`` environments.
+
+    ``params``: per environment, a dict of rope parameters overriding the config's
+    (``youngs_modulus``, ``density``, ``damping``; the domain randomisation)."""
+
+    def __init__(self, config: HitTargetConfig, n: int = 1, spacing: float = 4.0,
+                 params: list | None = None) -> None:
+        if not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"num_envs must be an integer >= 1, got {n!r}")
+        if not spacing > 2.0 * (config.rope_length + config.stick_length):
+            raise ValueError(f"spacing must exceed twice the reach of a rope on its stick "
+                             f"({2 * (config.rope_length + config.stick_length):g} m), got "
+                             f"{spacing!r}")
+        self.config = cfg = config
+        self.n = int(n)
+        self.origins = np.zeros((self.n, 3))
+        self.origins[:, 0] = spacing * np.arange(self.n)
+        base = {k: getattr(cfg, k) for k in ("youngs_modulus", "density", "damping")}
+        self.params = [dict(base, **(params[i] if params else {})) for i in range(self.n)]
+        self._target = np.asarray(cfg.target, dtype=np.float64)
+        self._active = np.asarray(cfg.active_joints, dtype=np.int64)
+        self._q0 = np.asarray(cfg.q0, dtype=np.float64)
+        self._upper = np.asarray(cfg.upper_limits, dtype=np.float64)
+        self._build()
+        n, k = self.n, len(cfg.bonus_thresholds)
+        self.q_cmd = np.tile(self._q0, (n, 1))
+        self.a_prev = np.zeros((n, len(self._active)))
+        self.steps = np.zeros(n, dtype=np.int64)
+        self.d = np.zeros(n)
+        self.d_min = np.zeros(n)
+        self.d_min_3d = np.zeros(n)
+        self.bonus_taken = np.zeros((n, k), dtype=bool)
+        self.touched = np.zeros(n, dtype=bool)
+        for i in range(n):
+            self.reset(i)
+
+    # ------------------------------------------------------------------ building
+    def _model_xml(self) -> str:
+        import mujoco
+
+        from deformx import robots
+
+        cfg = self.config
+        root = mujoco.MjSpec.from_string(
+            f'<mujoco><option timestep="{cfg.control_dt:.17g}" integrator="implicitfast"/>'
+            '<worldbody><geom name="floor" type="plane" size="0 0 0.05" '
+            'rgba="0.55 0.55 0.5 1"/></worldbody></mujoco>')
+        for i in range(self.n):
+            arm = mujoco.MjSpec.from_string(robots.ur5e(
+                tool_length=cfg.stick_length,
+                base_position=tuple(np.asarray(cfg.base_position) + self.origins[i]),
+                base_rotation=rot_x(cfg.base_rotation_x), ur_base_link=True, q0=cfg.q0,
+                timestep=cfg.control_dt))
+            root.attach(arm, prefix=f"e{i}_", frame=root.worldbody.add_frame())
+        xml = root.to_xml()
+        if cfg.rope == "capsule":
+            for i, p in enumerate(self.params):
+                xml = robots.capsule_rope(xml, parent=f"e{i}_tool_tip", length=cfg.rope_length,
+                                          n_segments=cfg.n_elements, radius=cfg.radius,
+                                          density=p["density"],
+                                          youngs_modulus=p["youngs_modulus"],
+                                          damping=cfg.capsule_damping,
+                                          armature=cfg.capsule_armature,
+                                          timestep=cfg.control_dt, name=f"e{i}_rope")
+        return xml
+
+    def _build(self) -> None:
+        import mujoco
+
+        import deformx as dx
+        from deformx import cosim, robots
+
+        cfg = self.config
+        self.backend = be = cosim.MujocoBackend(self._model_xml())
+        m, d = be.model, be.data
+        self._qadr = np.array([[m.jnt_qposadr[m.joint(f"e{i}_{j}").id] for j in robots.JOINTS]
+                               for i in range(self.n)])
+        self._vadr = np.array([[m.jnt_dofadr[m.joint(f"e{i}_{j}").id] for j in robots.JOINTS]
+                               for i in range(self.n)])
+        self._ctrl = np.array([[m.actuator(f"e{i}_{j.replace('_joint', '')}").id
+                                for j in robots.JOINTS] for i in range(self.n)])
+        self._tool = np.array([be.body_id(f"e{i}_tool_tip") for i in range(self.n)])
+        # every joint of copy i (its arm and its capsule chain): what a reset restores
+        qpos_i, dof_i = [], []
+        for i in range(self.n):
+            js = [j for j in range(m.njnt) if m.joint(j).name.startswith(f"e{i}_")]
+            qpos_i.append(np.concatenate([np.arange(m.jnt_qposadr[j], m.jnt_qposadr[j] + (
+                4 if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_BALL else 1)) for j in js]))
+            dof_i.append(np.concatenate([np.arange(m.jnt_dofadr[j], m.jnt_dofadr[j] + (
+                3 if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_BALL else 1)) for j in js]))
+        self._qpos_i, self._dof_i = qpos_i, dof_i
+        self._body_i = [np.array([b for b in range(m.nbody)
+                                  if m.body(b).name.startswith(f"e{i}_")]) for i in range(self.n)]
+        for i in range(self.n):
+            d.qpos[self._qadr[i]] = self._q0
+            d.ctrl[self._ctrl[i]] = self._q0
+        mujoco.mj_forward(m, d)
+        tops = d.xpos[self._tool].copy()
+        shapes = [initial_rope(tops[i], cfg.rope_length, cfg.n_elements, cfg.radius)
+                  for i in range(self.n)]
+        self.sim, self.rods = None, []
+        if cfg.rope == "capsule":
+            self.ropes = [cosim.CapsuleRope(be, name=f"e{i}_rope") for i in range(self.n)]
+            self._tip_sites = np.array([m.site(f"e{i}_rope_tip").id for i in range(self.n)])
+            for rope, shape in zip(self.ropes, shapes):
+                rope.set_shape(shape)
+        else:
+            world = dx.World(dt=cfg.rope_dt, integrator=cfg.integrator, rod_contact=False)
+            for shape, p in zip(shapes, self.params):
+                self.rods.append(world.add_rod(dx.Rod.from_points(
+                    shape, radius=cfg.radius, density=p["density"],
+                    youngs_modulus=p["youngs_modulus"], damping=p["damping"])))
+            world.add_plane(stiffness=cfg.ground_stiffness)
+            self.sim = cosim.CoSimulation(world, be)
+            for i, rod in enumerate(self.rods):
+                self.sim.attach(rod, "start", body=f"e{i}_tool_tip", frame=cfg.clamp_frame)
+            self.ropes = [cosim.RodRope(rod) for rod in self.rods]
+        be.begin()
+        for _ in range(int(round(cfg.settle_time / cfg.control_dt))):
+            self._advance()
+        self._settled = [self._save(i) for i in range(self.n)]
+
+    # ------------------------------------------------------------------ state
+    def _advance(self) -> None:
+        if self.sim is not None:
+            self.sim.step()
+        else:
+            self.backend.step()
+
+    def _save(self, i: int) -> tuple:
+        d = self.backend.data
+        q, v = self._qpos_i[i], self._dof_i[i]
+        rod = self.rods[i].get_state() if self.rods else None
+        b = self._body_i[i]  # the co-simulation's wrench on the stick acts through these
+        return (d.qpos[q].copy(), d.qvel[v].copy(), d.qacc_warmstart[v].copy(),
+                d.qfrc_applied[v].copy(), d.xfrc_applied[b].copy(),
+                d.ctrl[self._ctrl[i]].copy(), rod)
+
+    def _load(self, i: int, saved: tuple) -> None:
+        d = self.backend.data
+        q, v, b = self._qpos_i[i], self._dof_i[i], self._body_i[i]
+        (d.qpos[q], d.qvel[v], d.qacc_warmstart[v], d.qfrc_applied[v], d.xfrc_applied[b],
+         d.ctrl[self._ctrl[i]], rod) = saved
+        if rod is not None:
+            self.rods[i].set_state(rod)
+
+    def _full_state(self) -> tuple:
+        import mujoco
+
+        m, d = self.backend.model, self.backend.data
+        spec = mujoco.mjtState.mjSTATE_INTEGRATION
+        buf = np.empty(mujoco.mj_stateSize(m, spec))
+        mujoco.mj_getState(m, d, buf, spec)
+        return buf, self.sim.world.get_state()
+
+    def _restore_full(self, saved: tuple) -> None:
+        import mujoco
+
+        buf, world = saved
+        mujoco.mj_setState(self.backend.model, self.backend.data, buf,
+                           mujoco.mjtState.mjSTATE_INTEGRATION)
+        self.sim.world.set_state(world)
+
+    # ------------------------------------------------------------------ episodes
+    def reset(self, i: int) -> None:
+        """Copy ``i`` back to its settled state and a new episode."""
+        import mujoco
+
+        self._load(i, self._settled[i])
+        mujoco.mj_kinematics(self.backend.model, self.backend.data)  # its stick and chain
+        self.q_cmd[i] = self._q0
+        self.a_prev[i] = 0.0
+        self.steps[i] = 0
+        tip = self.tips()[0][i]
+        self.d[i] = self.d_min[i] = self._plane_distance(tip)
+        self.d_min_3d[i] = float(np.linalg.norm(tip - self._target))
+        self.bonus_taken[i] = False
+        self.touched[i] = False
+
+    def step(self, actions: np.ndarray) -> tuple:
+        """Apply ``actions`` (n, 3), advance one control step; returns rewards (n,),
+        terminated (n,), truncated (n,), success (n,), diverged (n,)."""
+        import deformx as dx
+
+        cfg = self.config
+        a = np.asarray(actions, dtype=np.float64).reshape(self.n, len(self._active))
+        if not np.all(np.isfinite(a)):
+            raise ValueError("actions must be finite")
+        a = np.clip(a, -1.0, 1.0)
+        q = self.q_cmd
+        q[:, self._active] = np.clip(q[:, self._active] + np.clip(a, 0.0, 1.0) * cfg.step_limit,
+                                     self._q0[self._active], self._upper)
+        d = self.backend.data
+        for i in range(self.n):
+            d.ctrl[self._ctrl[i]] = q[i]
+        diverged = np.zeros(self.n, dtype=bool)
+        if self.sim is None:
+            self._advance()
+        else:
+            before = self._full_state()
+            while True:
+                try:
+                    self._advance()
+                    break
+                except dx.SimulationDiverged as err:
+                    # roll the step back, take the diverged copy out (reset), step again
+                    self._restore_full(before)
+                    diverged[err.rod] = True
+                    self._load(err.rod, self._settled[err.rod])
+                    before = self._full_state()
+        self.steps += 1
+        tips, tip_v = self.tips()
+        dist = np.hypot(tips[:, 1] - self._target[1], tips[:, 2] - self._target[2])
+        ok = np.flatnonzero(~diverged)
+        rewards = np.zeros(self.n)
+        rewards[ok] = self._rewards(ok, dist[ok], tips[ok], tip_v[ok], a[ok])
+        self.d_min_3d[ok] = np.minimum(self.d_min_3d[ok],
+                                       np.linalg.norm(tips[ok] - self._target, axis=1))
+        self.d[ok] = dist[ok]
+        success = (self.d < cfg.success_distance) & ~diverged
+        self.a_prev[:] = a
+        terminated = success | (self.d > cfg.too_far) | diverged
+        truncated = (self.steps >= cfg.episode_steps) & ~terminated
+        return rewards, terminated, truncated, success, diverged
+
+    def tips(self) -> tuple[np.ndarray, np.ndarray]:
+        """Rope tip positions (n, 3) in each copy's frame and velocities (n, 3)."""
+        if self.rods:
+            pos = np.array([r.positions[-1] for r in self.rods])
+            vel = np.array([r.velocities[-1] for r in self.rods])
+        else:
+            import mujoco
+
+            m, d = self.backend.model, self.backend.data
+            mujoco.mj_kinematics(m, d)
+            mujoco.mj_comPos(m, d)
+            pos = d.site_xpos[self._tip_sites].copy()
+            vel = np.empty((self.n, 3))
+            res = np.zeros(6)
+            for i, site in enumerate(self._tip_sites):
+                mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_SITE, site, res, 0)
+                vel[i] = res[3:]
+        return pos - self.origins, vel
+
+    def _plane_distance(self, tip: np.ndarray) -> float:
+        return float(math.hypot(tip[1] - self._target[1], tip[2] - self._target[2]))
+
+    def reward(self, i: int, d: float, tip: np.ndarray, tip_v: np.ndarray,
+               a: np.ndarray) -> float:
+        """Copy ``i``'s reward for a step that ends at tip-to-target distance ``d`` (m, in
+        plane), tip position ``tip`` (env frame) and velocity ``tip_v``, after action ``a``;
+        updates the episode's best distance and one-off bonuses."""
+        return float(self._rewards(np.array([i]), np.array([d]), np.asarray(tip)[None],
+                                   np.asarray(tip_v)[None], np.asarray(a)[None])[0])
+
+    def _rewards(self, idx: np.ndarray, d: np.ndarray, tip: np.ndarray, tip_v: np.ndarray,
+                 a: np.ndarray) -> np.ndarray:
+        """Rewards of copies ``idx`` (the terms of ``docs/learning.md``), vectorised."""
+        cfg = self.config
+        r = cfg.w_proximity * np.exp(-d) + cfg.w_progress * (self.d[idx] - d)
+        better = d < self.d_min[idx]
+        r += np.where(better, cfg.w_new_best * (self.d_min[idx] - d), 0.0)
+        self.d_min[idx] = np.where(better, d, self.d_min[idx])
+        for k, (th, value) in enumerate(zip(cfg.bonus_thresholds, cfg.bonus_values)):
+            first = (d < th) & ~self.bonus_taken[idx, k]
+            self.bonus_taken[idx, k] |= first
+            r += value * first
+        touch = (d < cfg.touch_distance) & ~self.touched[idx]
+        self.touched[idx] |= touch
+        r += cfg.touch_bonus * touch
+        r += cfg.success_bonus * (d < cfg.success_distance)
+        to = self._target[1:] - tip[:, 1:]
+        norm = np.hypot(to[:, 0], to[:, 1])
+        towards = np.einsum("ij,ij->i", tip_v[:, 1:], to) / np.maximum(norm, 1e-9)
+        r += cfg.w_tip_velocity * np.where(norm > 1e-9, towards, 0.0)
+        r += cfg.w_wrist_velocity * self.backend.data.qvel[self._vadr[idx, 3]]
+        r -= cfg.time_penalty
+        r -= cfg.action_penalty * np.einsum("ij,ij->i", a, a)
+        da = a - self.a_prev[idx]
+        r -= cfg.smooth_penalty * np.einsum("ij,ij->i", da, da)
+        return np.clip(r, *cfg.reward_range)
+
+    def observations(self) -> np.ndarray:
+        """(n, 18) float32: active joint positions and velocities, rope tip position and
+        velocity, stick-tip position, target (each copy in its own frame)."""
+        d = self.backend.data
+        act = self._active
+        tips, tip_v = self.tips()
+        return np.concatenate([d.qpos[self._qadr[:, act]], d.qvel[self._vadr[:, act]], tips,
+                               tip_v, d.xpos[self._tool] - self.origins,
+                               np.broadcast_to(self._target, (self.n, 3))],
+                              axis=1).astype(np.float32)
+
+    def info(self, i: int, success: bool = False, diverged: bool = False) -> dict:
+        return {"d": float(self.d[i]), "d_min": float(self.d_min[i]),
+                "d_min_3d": float(self.d_min_3d[i]), "success": bool(success),
+                "diverged": bool(diverged), "joint_targets": self.q_cmd[i].copy()}
+
+
+def with_params(config: HitTargetConfig, rng: np.random.Generator) -> dict:
+    """Rope parameters drawn for one copy by ``config.randomise`` (uniform, +- fractions)."""
+    out = {}
+    for name, frac in config.randomise.items():
+        out[name] = getattr(config, name) * (1.0 + frac * rng.uniform(-1.0, 1.0))
+    return out
+
+
+__all__ = ["HitTargetBatch", "with_params"]
