@@ -183,3 +183,74 @@ def test_vector_env_members_are_independent_and_match_the_single_env():
             np.testing.assert_allclose(oa[0], os_first, atol=1e-6)  # a fresh episode
     a.close()
     b.close()
+
+
+def test_sb3_adapter_marks_time_limits_for_bootstrapping():
+    pytest.importorskip("stable_baselines3")
+    from deformx.learn.sb3 import SB3VecEnv
+    from deformx.learn.vector import HitTargetVecEnv
+
+    venv = SB3VecEnv(HitTargetVecEnv(2, **dict(SHORT, episode_steps=5)))
+    obs = venv.reset()
+    assert obs.shape == (2, 18)
+    for k in range(5):
+        venv.step_async(np.zeros((2, 3), dtype=np.float32))
+        obs, rewards, dones, infos = venv.step_wait()
+    assert dones.all() and all(i["TimeLimit.truncated"] for i in infos)
+    assert all(i["terminal_observation"].shape == (18,) for i in infos)
+    assert all(i["episode_d_min"] > 0 for i in infos)
+    venv.close()
+
+
+def test_ppo_improves_the_return_resumes_and_its_trajectory_replays(tmp_path):
+    """A learning check on a small budget (return of the last quarter of episodes above the
+    first quarter's); a second call continues the checkpoint; the exported joint commands
+    replayed open loop give the rollout's d_min again."""
+    pytest.importorskip("stable_baselines3")
+    import csv
+
+    from deformx.learn.train import TrainSettings, load_trajectory, replay, train
+
+    task = dict(target=(0.0, 1.0, 0.6), rope_dt=2e-3, settle_time=0.5, episode_steps=100)
+    settings = TrainSettings(total_steps=8192, num_envs=8, checkpoint_every=4096, video=False,
+                             task=task)
+    summary = train(tmp_path, settings, progress=False)
+    assert summary["timesteps"] == 8192
+    rows = list(csv.DictReader(open(tmp_path / "episodes.csv")))
+    more = TrainSettings(**dict(vars(settings), total_steps=16384))
+    summary = train(tmp_path, more, progress=False)  # resumes at 8192
+    assert summary["timesteps"] == 16384
+    rows2 = list(csv.DictReader(open(tmp_path / "episodes.csv")))
+    assert rows2[:len(rows)] == rows and len(rows2) > len(rows)  # appended, nothing lost
+    returns = np.array([float(r["return"]) for r in rows2])
+    q = len(returns) // 4
+    assert returns[-q:].mean() > returns[:q].mean() + 20.0
+    assert (tmp_path / "learning_curve.png").is_file() and (tmp_path / "tb").is_dir()
+    times, targets = load_trajectory(tmp_path / "best_rollout.csv")
+    assert targets.shape[1] == 6 and np.allclose(np.diff(times), 2e-3)
+    d = replay(targets, HitTargetConfig(**task), n=2)
+    assert d == pytest.approx([summary["d_min"]] * 2, abs=1e-6)
+
+
+def test_train_command_writes_a_run_directory(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    import json
+
+    from typer.testing import CliRunner
+
+    from deformx.cli import app
+
+    runner = CliRunner()
+    out = tmp_path / "run"
+    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
+                              "1024", "--envs", "4", "--rope-dt", "0.002", "--out", str(out),
+                              "--no-progress"])
+    assert res.exit_code == 0, res.output
+    for name in ("policy.zip", "checkpoints/latest.zip", "episodes.csv", "best_rollout.csv",
+                 "best_rollout.mp4", "summary.json", "settings.json"):
+        assert (out / name).is_file(), name
+    assert json.loads((out / "summary.json").read_text())["timesteps"] == 1024
+    res = runner.invoke(app, ["train", "hit-apple"])
+    assert res.exit_code != 0 and "hit-target" in res.output
+    res = runner.invoke(app, ["train", "hit-target", "--rope", "chain", "--out", str(out)])
+    assert res.exit_code != 0 and "rope must be" in res.output

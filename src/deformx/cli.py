@@ -1,4 +1,5 @@
-"""The ``deformx`` command: ``demo``, ``run SCENE.yaml`` and ``bench``."""
+"""The ``deformx`` command: ``demo``, ``run SCENE.yaml``, ``render``, ``bench`` and
+``train hit-target``."""
 
 from __future__ import annotations
 
@@ -358,6 +359,58 @@ def bench(
         console.print("tip diff: distance between the two engines' free-end positions of the first "
                       "rod after the same steps (same discretization, so it should be tiny).")
     console.print(f"total wall time {time.perf_counter() - t0:.1f} s")
+
+
+TASKS = ("hit-target",)
+
+
+@app.command()
+def train(
+    task: str = typer.Argument(..., help="The task: hit-target."),
+    target: tuple[float, float, float] = typer.Option((0.0, 2.0, 2.3), "--target",
+                                                      help="Target x y z (m, environment frame)."),
+    rope: str = typer.Option("cosserat", "--rope", help="cosserat or capsule."),
+    steps: int = typer.Option(200_000, "--steps", min=1, help="Environment steps (all environments)."),
+    envs: int = typer.Option(16, "--envs", min=1, help="Environments stepped together."),
+    out: Path = typer.Option(Path("deformx-train"), "--out", "-o", help="Run directory."),
+    seed: int = typer.Option(0, "--seed"),
+    resume: bool = typer.Option(True, "--resume/--restart", help="Continue checkpoints/latest.zip in --out."),
+    randomise: float = typer.Option(0.0, "--randomise", min=0.0, max=0.9,
+                                    help="Randomise the rope's E, density and damping by +- this fraction."),
+    rope_dt: Optional[float] = typer.Option(None, "--rope-dt", help="Cosserat rope step (s), a divisor of 2 ms."),
+    video: bool = typer.Option(True, "--video/--no-video", help="Write best_rollout.mp4."),
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
+) -> None:
+    """Train PPO (stable-baselines3) on a task; resumable. Writes checkpoints, episodes.csv,
+    TensorBoard logs (tb/), learning_curve.png, best_rollout.csv (the joint commands a UR5e
+    replays) and .mp4, summary.json. Needs the [learn] extra."""
+    if task not in TASKS:
+        _fail(f"task must be one of {', '.join(TASKS)}, got {task!r}")
+    try:
+        from .learn.train import TrainSettings, train as run_training
+    except ImportError as err:
+        _fail(f"{err}")
+    overrides: dict = {"target": tuple(target), "rope": rope}
+    if randomise > 0:
+        overrides["randomise"] = {"youngs_modulus": randomise, "density": randomise,
+                                  "damping": randomise}
+    if rope_dt is not None:
+        overrides["rope_dt"] = rope_dt
+    try:
+        settings = TrainSettings(total_steps=steps, num_envs=envs, seed=seed, video=video,
+                                 task=overrides)
+        from .learn.task import HitTargetConfig
+
+        HitTargetConfig(**overrides)  # bad task numbers fail here, before any work
+    except ValueError as err:
+        _fail(str(err))
+    t0 = time.perf_counter()
+    summary = run_training(out, settings, resume=resume, progress=progress)
+    console.print(f"[bold]DeformX train {task}[/bold]: {summary['timesteps']} environment steps "
+                  f"in {time.perf_counter() - t0:.1f} s; deterministic rollout d_min "
+                  f"{100 * summary['d_min']:.1f} cm (3D {100 * summary['d_min_3d']:.1f} cm)")
+    console.print(f"outputs in {escape(str(out))}: policy.zip, checkpoints/, episodes.csv, tb/, "
+                  "learning_curve.png, best_rollout.csv/.mp4, summary.json")
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -1,0 +1,294 @@
+"""PPO on the hit-target task (stable-baselines3, extra ``[learn]``), resumable, and what a
+trained policy is judged by: its deterministic rollout's ``d_min``, the joint-command
+trajectory a real UR5e replays open loop (CSV at the control rate), and that replay.
+
+The authors' PPO (their own implementation) and SB3's nearest settings:
+
+| authors | here (SB3 PPO) |
+| --- | --- |
+| actor and critic 18-256-128, tanh | ``net_arch=dict(pi=[256, 128], vf=[256, 128])``, ``Tanh`` |
+| Gaussian policy, fixed std 0.5 | ``log_std_init=log(0.5)``, log std frozen |
+| lr 3e-4, gamma 0.99, clip 0.2, 4 epochs | the same |
+| rollout 64 steps per environment | ``n_steps=64`` |
+| gradient clip 0.5 | ``max_grad_norm=0.5`` |
+| 4 environments | ``num_envs`` (one batch: one world, one MuJoCo model) |
+| minibatches | ``batch_size = num_envs * 64 / 4`` (four per epoch, at least 64) |
+
+A run directory holds ``checkpoints/latest.zip`` (written every ``checkpoint_every`` steps by
+a rename, so a kill loses at most that much), ``episodes.csv`` (one row per finished episode,
+appended), ``tb/`` (TensorBoard), and at the end ``policy.zip``, ``learning_curve.png``,
+``best_rollout.csv`` (time, six joint targets), ``best_rollout.mp4`` and ``summary.json``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+import numpy as np
+
+from .task import HitTargetConfig
+
+
+@dataclass
+class TrainSettings:
+    """What ``deformx train hit-target`` runs (SI units where they apply)."""
+
+    total_steps: int = 200_000               # environment steps, all environments together
+    num_envs: int = 16
+    rollout: int = 64                        # steps per environment per PPO update
+    epochs: int = 4
+    learning_rate: float = 3e-4
+    gamma: float = 0.99
+    clip: float = 0.2
+    std: float = 0.5                         # fixed policy std
+    grad_clip: float = 0.5
+    seed: int = 0
+    checkpoint_every: int = 20_000           # environment steps
+    video: bool = True
+    task: dict = field(default_factory=dict)  # HitTargetConfig overrides (target, rope, ...)
+
+    def __post_init__(self) -> None:
+        for name in ("total_steps", "num_envs", "rollout", "epochs", "checkpoint_every"):
+            v = getattr(self, name)
+            if not isinstance(v, (int, np.integer)) or v < 1:
+                raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+
+
+def _ppo():
+    try:
+        from stable_baselines3 import PPO
+    except ImportError as err:  # pragma: no cover - the [learn] extra
+        raise ImportError("training needs stable-baselines3 and torch: python -m pip install "
+                          "'deformx[learn]'") from err
+    return PPO
+
+
+def make_model(settings: TrainSettings, env, tensorboard: str | None = None):
+    """A PPO model with the authors' settings mapped to SB3 (module docstring)."""
+    import torch
+
+    PPO = _ppo()
+    n = settings.num_envs * settings.rollout
+    model = PPO("MlpPolicy", env, learning_rate=settings.learning_rate,
+                n_steps=settings.rollout, batch_size=max(64, n // 4), n_epochs=settings.epochs,
+                gamma=settings.gamma, clip_range=settings.clip, max_grad_norm=settings.grad_clip,
+                policy_kwargs=dict(net_arch=dict(pi=[256, 128], vf=[256, 128]),
+                                   activation_fn=torch.nn.Tanh,
+                                   log_std_init=math.log(settings.std)),
+                tensorboard_log=tensorboard, seed=settings.seed, device="cpu", verbose=0)
+    model.policy.log_std.requires_grad_(False)  # fixed exploration noise, as the authors'
+    return model
+
+
+def _callback(out: Path, settings: TrainSettings, progress: bool):
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from ..engine.running import progress_bar
+
+    class Track(BaseCallback):
+        """Episode rows to episodes.csv, d_min to TensorBoard, checkpoints, progress."""
+
+        def _on_training_start(self) -> None:
+            self.returns = np.zeros(settings.num_envs)
+            self.lengths = np.zeros(settings.num_envs, dtype=np.int64)
+            self.next_checkpoint = (self.num_timesteps // settings.checkpoint_every + 1) * \
+                settings.checkpoint_every
+            self.csv = open(out / "episodes.csv", "a", newline="")
+            self.writer = csv.writer(self.csv)
+            if self.csv.tell() == 0:
+                self.writer.writerow(["timesteps", "return", "length", "d_min", "d_min_3d",
+                                      "success"])
+            self.bar_cm = progress_bar("PPO (environment steps)", settings.total_steps,
+                                       progress)
+            self.bar = self.bar_cm.__enter__()
+            self.bar(self.num_timesteps)  # a resumed run starts where it stopped
+
+        def _on_step(self) -> bool:
+            self.returns += self.locals["rewards"]
+            self.lengths += 1
+            for i in np.flatnonzero(self.locals["dones"]):
+                info = self.locals["infos"][i]
+                self.writer.writerow([self.num_timesteps, f"{self.returns[i]:.6g}",
+                                      int(self.lengths[i]), f"{info['episode_d_min']:.6g}",
+                                      f"{info['episode_d_min_3d']:.6g}",
+                                      int(info["episode_success"])])
+                self.logger.record_mean("hit/return", float(self.returns[i]))
+                self.logger.record_mean("hit/d_min", info["episode_d_min"])
+                self.returns[i] = 0.0
+                self.lengths[i] = 0
+            if self.num_timesteps >= self.next_checkpoint:
+                save_checkpoint(self.model, out)
+                self.csv.flush()
+                self.next_checkpoint += settings.checkpoint_every
+            self.bar(self.num_timesteps)
+            return True
+
+        def _on_training_end(self) -> None:
+            self.csv.close()
+            self.bar_cm.__exit__(None, None, None)
+
+    return Track()
+
+
+def save_checkpoint(model, out: Path) -> Path:
+    """``checkpoints/latest.zip`` by a rename: never a half-written checkpoint."""
+    ckpt = out / "checkpoints"
+    ckpt.mkdir(parents=True, exist_ok=True)
+    tmp = ckpt / "latest.tmp.zip"
+    model.save(tmp)
+    os.replace(tmp, ckpt / "latest.zip")
+    return ckpt / "latest.zip"
+
+
+def train(out: str | Path, settings: TrainSettings | None = None, resume: bool = True,
+          progress: bool = True) -> dict:
+    """Train PPO on the hit-target task into ``out`` (see the module docstring); with
+    ``resume`` an existing ``checkpoints/latest.zip`` there is continued. Returns the
+    summary (also in ``summary.json``)."""
+    from .sb3 import SB3VecEnv
+    from .vector import HitTargetVecEnv
+
+    settings = settings or TrainSettings()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    config = HitTargetConfig(**settings.task)
+    (out / "settings.json").write_text(json.dumps(
+        {"train": {k: v for k, v in asdict(settings).items() if k != "task"},
+         "task": asdict(config)}, indent=1, default=str))
+    venv = SB3VecEnv(HitTargetVecEnv(settings.num_envs, config=config, seed=settings.seed))
+    latest = out / "checkpoints" / "latest.zip"
+    if resume and latest.is_file():
+        model = _ppo().load(latest, env=venv, device="cpu")
+        model.policy.log_std.requires_grad_(False)
+    else:
+        model = make_model(settings, venv, tensorboard=str(out / "tb"))
+    remaining = settings.total_steps - model.num_timesteps
+    if remaining > 0:
+        model.learn(remaining, callback=_callback(out, settings, progress),
+                    reset_num_timesteps=False, tb_log_name="ppo")
+        save_checkpoint(model, out)
+    model.save(out / "policy.zip")
+    venv.close()
+    result = rollout(model, config, video=out / "best_rollout.mp4" if settings.video else None)
+    export_trajectory(out / "best_rollout.csv", result["times"], result["joint_targets"])
+    curve = plot_learning_curve(out / "episodes.csv", out / "learning_curve.png")
+    summary = {"timesteps": int(model.num_timesteps), "d_min": result["d_min"],
+               "d_min_3d": result["d_min_3d"], "success": result["success"],
+               "learning_curve": str(curve) if curve else None}
+    (out / "summary.json").write_text(json.dumps(summary, indent=1))
+    return summary
+
+
+def rollout(policy, config: HitTargetConfig, video: str | Path | None = None,
+            seed: int = 0) -> dict:
+    """The deterministic rollout of ``policy`` (an SB3 model, or a callable obs -> action)
+    on one environment: ``d_min``, ``d_min_3d``, ``success``, ``times`` and the commanded
+    ``joint_targets`` (steps, 6) - the open-loop trajectory."""
+    from .hit_target import HitTargetEnv
+
+    render = video is not None and config.rope == "cosserat"
+    env = HitTargetEnv(config=config, render_mode="rgb_array" if render else None)
+    obs, info = env.reset(seed=seed)
+    act = policy if callable(policy) else (lambda o: policy.predict(o, deterministic=True)[0])
+    targets, frames = [], []
+    every = max(1, int(round(1.0 / (30 * config.control_dt))))  # ~30 frames per second
+    for k in range(config.episode_steps):
+        obs, _, terminated, truncated, info = env.step(act(obs))
+        targets.append(info["joint_targets"])
+        if render and k % every == 0:
+            frames.append(env.render())
+        if terminated or truncated:
+            break
+    if render and frames:
+        import imageio.v2 as imageio
+
+        imageio.mimwrite(str(video), frames, fps=30, macro_block_size=1)
+    env.close()
+    times = config.control_dt * np.arange(1, len(targets) + 1)
+    return {"d_min": info["d_min"], "d_min_3d": info["d_min_3d"], "success": info["success"],
+            "times": times, "joint_targets": np.array(targets)}
+
+
+def export_trajectory(path: str | Path, times: np.ndarray, joint_targets: np.ndarray) -> Path:
+    """CSV a UR5e can replay: ``time`` (s) and the six joint targets (rad) at the control
+    rate (the paper's open-loop deployment)."""
+    from deformx.robots import JOINTS
+
+    path = Path(path)
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["time"] + list(JOINTS))
+        for t, q in zip(times, joint_targets):
+            w.writerow([f"{t:.6f}"] + [f"{v:.9f}" for v in q])
+    return path
+
+
+def load_trajectory(path: str | Path) -> tuple[np.ndarray, np.ndarray]:
+    """(times, joint_targets (steps, 6)) from :func:`export_trajectory`'s CSV."""
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if data.shape[1] != 7:
+        raise ValueError(f"{path}: expected 7 columns (time and six joints), got "
+                         f"{data.shape[1]}")
+    return data[:, 0], data[:, 1:]
+
+
+def replay(joint_targets: np.ndarray, config: HitTargetConfig, n: int = 1,
+           perturb: dict | None = None, seed: int = 0) -> np.ndarray:
+    """Replay a joint-command trajectory open loop ``n`` times (``perturb``: rope parameter
+    fractions drawn per replay, e.g. ``{"youngs_modulus": 0.1}``); returns each replay's
+    in-plane ``d_min`` (m)."""
+    from dataclasses import replace
+
+    from .batch import HitTargetBatch, with_params
+
+    rng = np.random.default_rng(seed)
+    cfg = replace(config, randomise=dict(perturb or {}),
+                  episode_steps=max(config.episode_steps, len(joint_targets)))
+    params = [with_params(cfg, rng) for _ in range(n)]
+    batch = HitTargetBatch(cfg, n, params=params)
+    d_min = np.full(n, np.inf)
+    for q in np.asarray(joint_targets, dtype=np.float64):
+        batch.q_cmd[:] = q  # the trajectory itself; actions of zero leave it as it is
+        _, terminated, _, _, diverged = batch.step(np.zeros((n, len(cfg.active_joints))))
+        d_min = np.minimum(d_min, np.where(diverged, np.inf, batch.d))
+    return d_min
+
+
+def plot_learning_curve(episodes_csv: str | Path, png: str | Path) -> Path | None:
+    """Return and d_min per episode against environment steps (a moving mean over 50)."""
+    path = Path(episodes_csv)
+    if not path.is_file():
+        return None
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if len(rows) < 2:
+        return None
+    data = {key: np.array([float(r[key]) for r in rows]) for key in rows[0]}
+    size = len(rows)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    k = max(1, min(50, size // 5))
+    smooth = np.ones(k) / k
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.6))
+    for ax, key, label in ((a, "return", "episode return"), (b, "d_min", "d_min (m)")):
+        ax.plot(data["timesteps"], data[key], ".", ms=2, alpha=0.3)
+        if size >= k:
+            ax.plot(data["timesteps"][k - 1:], np.convolve(data[key], smooth, "valid"))
+        ax.set_xlabel("environment steps")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+    return Path(png)
+
+
+__all__ = ["TrainSettings", "train", "rollout", "replay", "export_trajectory",
+           "load_trajectory", "plot_learning_curve", "make_model"]
