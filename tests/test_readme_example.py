@@ -46,3 +46,20 @@ def test_readme_render_example_runs(tmp_path, monkeypatch):
                   "length=0.6))\nworld.add_plane()\n")
     exec(compile(world_code + code, "README.md", "exec"), {})
     assert (tmp_path / "frames" / "t0_instances.png").is_file()
+
+
+def test_readme_learning_example_runs():
+    import pytest
+
+    pytest.importorskip("gymnasium")
+    text = README.read_text()
+    section = text[text.index("## Robot learning: the hit-target task"):]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    code = code.replace("num_envs=32", "num_envs=2")  # the same call, a smaller batch
+    scope: dict = {}
+    exec(compile(code, "README.md", "exec"), scope)
+    env, envs = scope["env"], scope["envs"]
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (18,) and envs.reset(seed=0)[0].shape == (2, 18)
+    env.close()
+    envs.close()

@@ -361,6 +361,61 @@ def bench(
     console.print(f"total wall time {time.perf_counter() - t0:.1f} s")
 
 
+@app.command()
+def calibrate(
+    markers: Path = typer.Argument(..., help="Markers CSV (time, marker, x, y, z), e.g. motion capture."),
+    motion: Path = typer.Option(..., "--motion", help="Tool-tip path CSV (time, x, y, z) the robot followed."),
+    rope: str = typer.Option("cosserat", "--rope", help="cosserat or capsule."),
+    density: float = typer.Option(700.0, "--density", min=1e-9, help="kg/m^3, from the measured mass per length."),
+    length: float = typer.Option(2.0, "--length", min=1e-9, help="Rope length (m)."),
+    radius: float = typer.Option(0.00635, "--radius", min=1e-9, help="Rope radius (m)."),
+    evals: int = typer.Option(60, "--evals", min=2, help="Simulations CMA-ES may run."),
+    out: Path = typer.Option(Path("deformx-calibration"), "--out", "-o", help="Output directory."),
+    progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
+) -> None:
+    """Fit a rope model (Young's modulus and damping) to recorded markers by replaying the
+    recorded tool motion in the paper's calibration setup; writes fit.json and
+    calibration.png (marker error over time before and after the fit)."""
+    import json
+    from dataclasses import replace
+
+    from .apps import calibration as cal
+    from .apps import rope_fit as rf
+
+    try:
+        table = rf.read_markers(markers)
+        path = rf.read_motion(motion)
+        setup = replace(cal.Setup(), density=density, length=length, radius=radius)
+        if rope not in rf.FITTED:
+            raise ValueError(f"rope must be one of {tuple(rf.FITTED)}, got {rope!r}")
+    except (OSError, ValueError) as err:
+        _fail(str(err))
+    out.mkdir(parents=True, exist_ok=True)
+    n = int(table[:, 1].max()) + 1
+    before = cal.marker_error(rf.simulate(rope, replace(setup, markers=n), path,
+                                          table[::n, 0]), table)
+    t0 = time.perf_counter()
+    try:
+        result = rf.calibrate(table, path, rope, setup=setup, max_evals=evals, progress=progress)
+    except ImportError as err:
+        _fail(str(err))
+    rf.plot_fit(result, out / "calibration.png", initial=before)
+    (out / "fit.json").write_text(json.dumps({
+        "rope": rope, "parameters": result.parameters, "mean_error_m": result.error,
+        "mean_error_before_m": float(before.mean()), "evaluations": len(result.evaluations),
+        "density": density}, indent=1))
+    table_out = Table(title=f"DeformX calibrate ({rope}): {len(result.evaluations)} simulations "
+                            f"in {time.perf_counter() - t0:.1f} s")
+    table_out.add_column("parameter")
+    table_out.add_column("fitted", justify="right")
+    for k, v in result.parameters.items():
+        table_out.add_row(k, f"{v:.4g}")
+    table_out.add_row("mean marker error", f"{100 * result.error:.2f} cm (before "
+                                           f"{100 * before.mean():.2f} cm)")
+    console.print(table_out)
+    console.print(f"outputs in {escape(str(out))}: fit.json, calibration.png")
+
+
 TASKS = ("hit-target",)
 
 

@@ -104,7 +104,8 @@ class Experiment:
     """The calibration experiment, ready to step: ``step()`` one control step, ``time``,
     ``rope`` (the :class:`deformx.cosim.Rope` interface), ``markers()``."""
 
-    def __init__(self, rope: str = "cosserat", setup: Setup | None = None) -> None:
+    def __init__(self, rope: str = "cosserat", setup: Setup | None = None,
+                 motion: tuple | None = None) -> None:
         import deformx as dx
         from deformx import cosim, robots
         from deformx.robots.ik import solve_position
@@ -113,6 +114,12 @@ class Experiment:
             raise ValueError(f"rope must be 'cosserat' or 'capsule', got {rope!r}")
         self.kind = rope
         self.setup = s = setup or Setup()
+        self._motion = None
+        if motion is not None:  # (times (T,), tool positions (T, 3)): a recorded path
+            t, p = (np.asarray(a, dtype=np.float64) for a in motion)
+            if t.ndim != 1 or p.shape != (len(t), 3) or len(t) < 2 or np.any(np.diff(t) <= 0):
+                raise ValueError("motion: times (T,) increasing and positions (T, 3), T >= 2")
+            self._motion = (t, p)
         xml = robots.ur5e(tool_length=s.tool_length, base_position=s.base, floor=True,
                           timestep=s.dt)
         model = cosim.mujoco_backend.load_model(xml)
@@ -156,7 +163,11 @@ class Experiment:
         return self.backend.time
 
     def tool_target(self, t: float) -> np.ndarray:
-        """The tool tip's commanded position (m) at time ``t`` (s)."""
+        """The tool tip's commanded position (m) at time ``t`` (s): the recorded motion
+        (interpolated, held after its end) or the setup's sinusoid."""
+        if self._motion is not None:
+            times, pos = self._motion
+            return np.array([np.interp(t, times, pos[:, k]) for k in range(3)])
         s = self.setup
         return np.array(s.start) + np.array([0.0, 0.0, s.amplitude * math.sin(
             2.0 * math.pi * s.frequency * t)])
@@ -179,10 +190,12 @@ class Experiment:
 
 
 def run(rope: str = "cosserat", duration: float = 3.0, out: str | Path | None = None,
-        setup: Setup | None = None, every: float = 0.01, progress: bool = False) -> np.ndarray:
+        setup: Setup | None = None, every: float = 0.01, progress: bool = False,
+        motion: tuple | None = None) -> np.ndarray:
     """Run the experiment for ``duration`` s and record the markers every ``every`` s;
-    returns rows (time, marker, x, y, z) and writes them to ``out`` (CSV) if given."""
-    exp = Experiment(rope, setup)
+    returns rows (time, marker, x, y, z) and writes them to ``out`` (CSV) if given.
+    ``motion``: (times, tool positions) replayed instead of the sinusoid."""
+    exp = Experiment(rope, setup, motion=motion)
     n = int(round(duration / exp.setup.dt))
     k_every = max(1, int(round(every / exp.setup.dt)))
     rows = []

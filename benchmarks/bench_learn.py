@@ -1,0 +1,105 @@
+"""Batched hit-target environments: environment steps per second of ``gym.make_vec``'s batch
+(one MuJoCo model with N UR5e arms, one DeformX world with N ropes) against PyElastica stepping
+the same rope at the authors' 1e-5 s (200 substeps per 2 ms control step), in the same run.
+
+Random actions; episodes that end are reset in the same step (counted in). The split says
+where a batch step goes: ropes (the world's kernel), MuJoCo (all arms), coupling (reading
+bodies, drivers, wrenches) and Python (the task: actions, rewards, observations, resets).
+Rounds interleave every case; the table gives min-max over rounds.
+
+    python benchmarks/bench_learn.py                      # N = 16, 64; 3 rounds
+    python benchmarks/bench_learn.py --envs 64 256 --rounds 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+ROPES = {
+    "stable 4 x 0.5 ms (default)": dict(),
+    "stable 1 x 2 ms": dict(rope_dt=2e-3),
+    "explicit 4 x 0.5 ms": dict(integrator="verlet"),
+}
+
+
+def batch_rate(venv, steps: int, rng: np.random.Generator) -> tuple[float, dict]:
+    """Environment steps per second and the split (s per batch step)."""
+    sim = venv.batch.sim
+    sim.profile = True
+    sim.reset_timings()
+    n = venv.num_envs
+    actions = rng.uniform(-1, 1, (steps, n, 3)).astype(np.float32)
+    t0 = time.perf_counter()
+    for a in actions:
+        venv.step(a)
+    wall = (time.perf_counter() - t0) / steps
+    tm = {k: v / steps for k, v in sim.timings.items() if k != "steps"}
+    sim.profile = False
+    tm["python"] = wall - sum(tm.values())
+    return n / wall, tm
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--envs", type=int, nargs="+", default=[16, 64])
+    parser.add_argument("--steps", type=int, default=100, help="batch steps per round")
+    parser.add_argument("--rounds", type=int, default=3)
+    args = parser.parse_args()
+    sys.path.insert(0, os.path.dirname(__file__))
+    from bench_cosim import elastica_rope  # the same rope, PyElastica at 1e-5 s
+
+    from deformx.learn.vector import HitTargetVecEnv
+
+    console = Console()
+    rng = np.random.default_rng(0)
+    envs = {}
+    for n in args.envs:
+        for name, kw in ROPES.items():
+            t0 = time.perf_counter()
+            envs[(n, name)] = v = HitTargetVecEnv(n, settle_time=0.2, **kw)
+            v.reset(seed=0)
+            batch_rate(v, 3, rng)  # warm
+            console.print(f"built {n} x {name} in {time.perf_counter() - t0:.1f} s")
+    _, pe_step = elastica_rope()
+    pe_step()
+    rates = {key: [] for key in envs}
+    splits = {key: [] for key in envs}
+    pe = []
+    for _ in range(args.rounds):
+        for key, v in envs.items():
+            r, tm = batch_rate(v, args.steps, rng)
+            rates[key].append(r)
+            splits[key].append(tm)
+        t0 = time.perf_counter()
+        for _ in range(20):
+            pe_step()
+        pe.append(20 / (time.perf_counter() - t0))
+    pe_lo, pe_hi = min(pe), max(pe)
+    table = Table(title=f"HitTarget-v0 batches, random actions, {args.steps} batch steps x "
+                        f"{args.rounds} rounds (min-max)")
+    for col in ("envs", "rope", "env steps / s", "x PyElastica 1e-5 s",
+                "split per env step (us): rope / MuJoCo / coupling / Python"):
+        table.add_column(col, justify="right")
+    for (n, name), rs in rates.items():
+        med = {k: float(np.median([s[k] for s in splits[(n, name)]])) * 1e6 / n
+               for k in ("rods", "backend", "coupling", "python")}
+        table.add_row(str(n), name, f"{min(rs):,.0f}-{max(rs):,.0f}",
+                      f"{min(rs) / pe_hi:.0f}-{max(rs) / pe_lo:.0f}x",
+                      " / ".join(f"{med[k]:.1f}" for k in ("rods", "backend", "coupling",
+                                                           "python")))
+    console.print(table)
+    console.print(f"PyElastica, one rope, 200 x 1e-5 s per control step: {pe_lo:,.0f}-"
+                  f"{pe_hi:,.0f} control steps / s (no robot, no Python task code)")
+    console.print(f"[dim]{time.strftime('%Y-%m-%d %H:%M')}, python {sys.version.split()[0]}, "
+                  f"{os.cpu_count()} cores[/dim]")
+
+
+if __name__ == "__main__":
+    main()
