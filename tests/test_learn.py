@@ -254,3 +254,32 @@ def test_train_command_writes_a_run_directory(tmp_path):
     assert res.exit_code != 0 and "hit-target" in res.output
     res = runner.invoke(app, ["train", "hit-target", "--rope", "chain", "--out", str(out)])
     assert res.exit_code != 0 and "rope must be" in res.output
+
+
+def test_hit_apple_variant_measures_in_3d_and_pays_the_strike():
+    """examples/hit_apple.py's task: joints 2, 3, 4 act, d is 3D, horizontal tip speed near
+    the apple is rewarded."""
+    import importlib.util
+    from pathlib import Path
+
+    spec = importlib.util.spec_from_file_location(
+        "hit_apple", Path(__file__).resolve().parents[1] / "examples" / "hit_apple.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    e = HitTargetEnv(**dict(mod.TASK, **SHORT))
+    obs, info = e.reset(seed=0)
+    tip = e.rope.tip_position
+    assert info["d"] == pytest.approx(np.linalg.norm(tip - np.array(mod.APPLE)), abs=1e-9)
+    _, _, _, _, info = e.step(np.ones(3))
+    q0 = np.array(e.config.q0)
+    moved = np.flatnonzero(info["joint_targets"] != q0)
+    assert set(moved) <= {2, 3, 4} and len(moved) >= 2
+    b = e.batch
+    apple = np.array(mod.APPLE)
+    near = apple + np.array([0.0, 0.05, 0.0])
+    b.d[0], b.d_min[0], b.a_prev[0] = 0.05, 0.0, 0.0
+    b.bonus_taken[0] = b.touched[0] = True  # one-off bonuses already paid
+    e.backend.data.qvel[:] = 0.0
+    slow = e._reward(0.05, near, np.zeros(3), np.zeros(3))
+    fast = e._reward(0.05, near, np.array([3.0, 0.0, 0.0]), np.zeros(3))
+    assert fast - slow == pytest.approx(e.config.w_strike * 3.0, abs=1e-9)

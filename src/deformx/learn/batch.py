@@ -232,7 +232,7 @@ class HitTargetBatch:
                     before = self._full_state()
         self.steps += 1
         tips, tip_v = self.tips()
-        dist = np.hypot(tips[:, 1] - self._target[1], tips[:, 2] - self._target[2])
+        dist = self._distances(tips)
         ok = np.flatnonzero(~diverged)
         rewards = np.zeros(self.n)
         rewards[ok] = self._rewards(ok, dist[ok], tips[ok], tip_v[ok], a[ok])
@@ -264,8 +264,14 @@ class HitTargetBatch:
                 vel[i] = res[3:]
         return pos - self.origins, vel
 
+    def _distances(self, tips: np.ndarray) -> np.ndarray:
+        """Tip-to-target distances (n,): in the swing plane (y-z), or in 3D."""
+        if self.config.distance == "3d":
+            return np.linalg.norm(tips - self._target, axis=1)
+        return np.hypot(tips[:, 1] - self._target[1], tips[:, 2] - self._target[2])
+
     def _plane_distance(self, tip: np.ndarray) -> float:
-        return float(math.hypot(tip[1] - self._target[1], tip[2] - self._target[2]))
+        return float(self._distances(np.asarray(tip)[None])[0])
 
     def reward(self, i: int, d: float, tip: np.ndarray, tip_v: np.ndarray,
                a: np.ndarray) -> float:
@@ -291,11 +297,15 @@ class HitTargetBatch:
         self.touched[idx] |= touch
         r += cfg.touch_bonus * touch
         r += cfg.success_bonus * (d < cfg.success_distance)
-        to = self._target[1:] - tip[:, 1:]
-        norm = np.hypot(to[:, 0], to[:, 1])
-        towards = np.einsum("ij,ij->i", tip_v[:, 1:], to) / np.maximum(norm, 1e-9)
+        axes = slice(0, 3) if cfg.distance == "3d" else slice(1, 3)  # the distance's space
+        to = self._target[axes] - tip[:, axes]
+        norm = np.linalg.norm(to, axis=1)
+        towards = np.einsum("ij,ij->i", tip_v[:, axes], to) / np.maximum(norm, 1e-9)
         r += cfg.w_tip_velocity * np.where(norm > 1e-9, towards, 0.0)
         r += cfg.w_wrist_velocity * self.backend.data.qvel[self._vadr[idx, 3]]
+        if cfg.w_strike:  # hit-apple: horizontal speed of the tip at the target
+            near = np.linalg.norm(tip - self._target, axis=1) < cfg.strike_radius
+            r += cfg.w_strike * near * np.hypot(tip_v[:, 0], tip_v[:, 1])
         r -= cfg.time_penalty
         r -= cfg.action_penalty * np.einsum("ij,ij->i", a, a)
         da = a - self.a_prev[idx]

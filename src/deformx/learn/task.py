@@ -60,6 +60,11 @@ class HitTargetConfig:
     smooth_penalty: float = 0.02
     reward_range: tuple = (-10.0, 200.0)
     too_far: float = 4.0
+    # the hit-apple variant: distance in 3D instead of the swing plane, and a reward for the
+    # tip's horizontal speed (m/s) while within strike_radius of the target
+    distance: str = "plane"                  # "plane" (y-z) or "3d"
+    w_strike: float = 0.0
+    strike_radius: float = 0.1
     # randomisation of the rope (fractions, uniform +-): the single environment redraws at
     # every reset (and settles the new rope), the vector environment once per member
     randomise: dict = field(default_factory=dict)  # e.g. {"youngs_modulus": 0.3}
@@ -82,6 +87,8 @@ class HitTargetConfig:
                      "stick_length"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if self.distance not in ("plane", "3d"):
+            raise ValueError(f"distance must be 'plane' or '3d', got {self.distance!r}")
         unknown = set(self.randomise) - {"youngs_modulus", "density", "damping"}
         if unknown:
             raise ValueError(f"randomise: only youngs_modulus, density and damping, got "
