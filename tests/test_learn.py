@@ -10,7 +10,8 @@ import pytest
 
 gym = pytest.importorskip("gymnasium")
 
-import deformx.learn  # noqa: E402,F401  (registers deformx/HitTarget-v0)
+import deformx  # noqa: E402,F401  (registers deformx/HitTarget-v0)
+import deformx.learn  # noqa: E402,F401
 from deformx.learn import HitTargetConfig, HitTargetEnv  # noqa: E402
 
 SHORT = dict(settle_time=0.2, episode_steps=60)
@@ -283,3 +284,14 @@ def test_hit_apple_variant_measures_in_3d_and_pays_the_strike():
     slow = e._reward(0.05, near, np.zeros(3), np.zeros(3))
     fast = e._reward(0.05, near, np.array([3.0, 0.0, 0.0]), np.zeros(3))
     assert fast - slow == pytest.approx(e.config.w_strike * 3.0, abs=1e-9)
+
+
+def test_import_deformx_registers_the_environment():
+    """DESIGN.md's usage: gymnasium.make after import deformx, no deformx.learn import."""
+    import subprocess
+    import sys
+
+    code = ("import gymnasium, deformx, sys; "
+            "env = gymnasium.make('deformx/HitTarget-v0', settle_time=0.02); "
+            "sys.exit(env.reset(seed=0)[0].shape != (18,))")
+    assert subprocess.run([sys.executable, "-c", code], timeout=300).returncode == 0

@@ -1,10 +1,10 @@
 """Robot learning on DeformX (extra ``[learn]``): the paper's hit-target rope-swinging task as
 Gymnasium environments.
 
-``import deformx.learn`` registers ``deformx/HitTarget-v0``::
+``import deformx`` (with Gymnasium installed) registers ``deformx/HitTarget-v0``::
 
     import gymnasium as gym
-    import deformx.learn  # noqa: F401  (or gym.register_envs(deformx.learn))
+    import deformx  # noqa: F401
 
     env = gym.make("deformx/HitTarget-v0", target=(0.0, 2.0, 1.5), rope="cosserat")
     envs = gym.make_vec("deformx/HitTarget-v0", num_envs=64,
@@ -15,13 +15,7 @@ See ``docs/learning.md``.
 
 from __future__ import annotations
 
-import gymnasium as _gym
-
 from .hit_target import HitTargetEnv
 from .task import HitTargetConfig
 
 __all__ = ["HitTargetConfig", "HitTargetEnv"]
-
-if "deformx/HitTarget-v0" not in _gym.registry:
-    _gym.register(id="deformx/HitTarget-v0", entry_point="deformx.learn.hit_target:HitTargetEnv",
-                  vector_entry_point="deformx.learn.vector:HitTargetVecEnv")

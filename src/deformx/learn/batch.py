@@ -212,9 +212,7 @@ class HitTargetBatch:
         q = self.q_cmd
         q[:, self._active] = np.clip(q[:, self._active] + np.clip(a, 0.0, 1.0) * cfg.step_limit,
                                      self._q0[self._active], self._upper)
-        d = self.backend.data
-        for i in range(self.n):
-            d.ctrl[self._ctrl[i]] = q[i]
+        self.backend.data.ctrl[self._ctrl] = q
         diverged = np.zeros(self.n, dtype=bool)
         if self.sim is None:
             self._advance()
