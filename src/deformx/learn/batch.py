@@ -121,6 +121,8 @@ class HitTargetBatch:
         shapes = [initial_rope(tops[i], cfg.rope_length, cfg.n_elements, cfg.radius)
                   for i in range(self.n)]
         self.sim, self.rods = None, []
+        self._tip_index = None  # where the ropes' tips lie in the world's buffers
+        self._tip_owner = None
         if cfg.rope == "capsule":
             self.ropes = [cosim.CapsuleRope(be, name=f"e{i}_rope") for i in range(self.n)]
             self._tip_sites = np.array([m.site(f"e{i}_rope_tip").id for i in range(self.n)])
@@ -246,8 +248,13 @@ class HitTargetBatch:
     def tips(self) -> tuple[np.ndarray, np.ndarray]:
         """Rope tip positions (n, 3) in each copy's frame and velocities (n, 3)."""
         if self.rods:
-            pos = np.array([r.positions[-1] for r in self.rods])
-            vel = np.array([r.velocities[-1] for r in self.rods])
+            if self._tip_index is None or self._tip_owner is not self.rods[0].positions.base:
+                # (again whenever the world repacked its buffers)
+                self._tip_owner = self.rods[0].positions.base
+                self._tip_index = {k: _flat_rows([getattr(r, k)[-1] for r in self.rods])
+                                   for k in ("positions", "velocities")}
+            (pb, pi), (vb, vi) = self._tip_index["positions"], self._tip_index["velocities"]
+            pos, vel = pb[pi], vb[vi]
         else:
             import mujoco
 
@@ -325,6 +332,20 @@ class HitTargetBatch:
         return {"d": float(self.d[i]), "d_min": float(self.d_min[i]),
                 "d_min_3d": float(self.d_min_3d[i]), "success": bool(success),
                 "diverged": bool(diverged), "joint_targets": self.q_cmd[i].copy()}
+
+
+def _flat_rows(views: list) -> tuple[np.ndarray, np.ndarray]:
+    """(flat buffer, (k, 3) indices) such that ``buffer[indices]`` gathers the 3-vectors
+    ``views`` (rows of one packed engine buffer) in one step, not a Python loop."""
+    base = views[0]
+    while base.base is not None:
+        base = base.base
+    start = base.__array_interface__["data"][0]
+    item = base.itemsize
+    off = np.array([(v.__array_interface__["data"][0] - start) // item for v in views])
+    if any(v.strides != (item,) for v in views) or off.min() < 0 or off.max() + 3 > base.size:
+        raise RuntimeError("rope tips are not rows of one engine buffer")
+    return base.reshape(-1), off[:, None] + np.arange(3)
 
 
 def with_params(config: HitTargetConfig, rng: np.random.Generator) -> dict:
