@@ -8,6 +8,8 @@ every 2 ms control step, as the co-simulation does. Chooses the task's default r
 
     python benchmarks/bench_rope_accuracy.py                 # 3 s, both motions
     python benchmarks/bench_rope_accuracy.py --duration 1 --motion swing
+    python benchmarks/bench_rope_accuracy.py --motion vertical --stretch-modulus 2e7 \
+        --shear-modulus 6.7e6 --cases stable:2e-3 stable:5e-4 explicit:1e-4
 """
 
 from __future__ import annotations
@@ -37,12 +39,15 @@ def clamp_motion(t: float, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     return p, AMP * w * math.cos(w * t) * axis, -AMP * w * w * math.sin(w * t) * axis
 
 
-def run(integrator: str, dt: float, motion: str, duration: float) -> tuple[np.ndarray, float]:
-    """Tip positions at every control step and wall seconds per control step."""
+def run(integrator: str, dt: float, motion: str, duration: float,
+        moduli: dict | None = None) -> tuple[np.ndarray, float]:
+    """Tip positions at every control step and wall seconds per control step; ``moduli``:
+    stretch_modulus / shear_modulus of the rope (default: from E, as the authors')."""
     world = dx.World(dt=dt, integrator="verlet" if integrator == "explicit" else integrator)
     rod = world.add_rod(dx.Rod.straight(n_elements=20, start=(0, 0, 1), direction=(0, 0, -1),
                                         length=1.0, radius=0.00635, density=700.0,
-                                        youngs_modulus=2e5, damping=0.1, normal=(1, 0, 0)))
+                                        youngs_modulus=2e5, damping=0.1, normal=(1, 0, 0),
+                                        **(moduli or {})))
     clamp = rod.fix_start()
     axis = np.array([0.0, 0.0, 1.0]) if motion == "vertical" else np.array([0.0, 1.0, 0.0])
     substeps = int(round(CONTROL_DT / dt))
@@ -67,19 +72,27 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=3.0, help="simulated s")
     parser.add_argument("--motion", choices=("vertical", "swing", "both"), default="both")
+    parser.add_argument("--stretch-modulus", type=float, default=None, help="Pa (default E)")
+    parser.add_argument("--shear-modulus", type=float, default=None, help="Pa (default E/3)")
+    parser.add_argument("--cases", nargs="+", default=None,
+                        help="integrator:dt pairs, e.g. stable:5e-4 explicit:1e-4")
     args = parser.parse_args()
+    moduli = {k: v for k, v in (("stretch_modulus", args.stretch_modulus),
+                                ("shear_modulus", args.shear_modulus)) if v is not None}
+    cases = CASES if args.cases is None else [("explicit", 1e-5)] + [
+        (c.split(":")[0], float(c.split(":")[1])) for c in args.cases]
     console = Console()
     motions = ("vertical", "swing") if args.motion == "both" else (args.motion,)
     for motion in motions:
-        table = Table(title=f"task rope, {motion} clamp motion {FREQ} Hz {AMP} m, "
-                            f"{args.duration:g} s: tip error vs explicit 1e-5 s")
+        table = Table(title=f"task rope {moduli or ''}, {motion} clamp motion {FREQ} Hz {AMP} "
+                            f"m, {args.duration:g} s: tip error vs explicit 1e-5 s")
         for col in ("integrator", "dt (s)", "substeps / 2 ms", "mean (cm)", "max (cm)",
                     "us / control step"):
             table.add_column(col, justify="right")
         ref = None
-        for integrator, dt in CASES:
+        for integrator, dt in cases:
             try:
-                tips, cost = run(integrator, dt, motion, args.duration)
+                tips, cost = run(integrator, dt, motion, args.duration, moduli)
             except dx.SimulationDiverged as err:
                 table.add_row(integrator, f"{dt:g}", f"{round(CONTROL_DT / dt)}", "diverged",
                               str(err).split(".")[0][:40], "-")

@@ -76,18 +76,23 @@ def _transported_directors(tangents: np.ndarray, normal: np.ndarray) -> np.ndarr
 class Rod:
     """One Cosserat rod: circular cross-section, linear elastic, uniform density.
 
-    Use :meth:`straight` or :meth:`from_points`. SI units throughout.
+    Use :meth:`straight` or :meth:`from_points`. SI units throughout. ``stretch_modulus``
+    (Pa, default ``youngs_modulus``) sets the axial stiffness E_s A apart from the bending
+    E I: a rope or a stranded cable bends like a soft solid but stretches like its fibres.
     """
 
     def __init__(self, positions: np.ndarray, directors: np.ndarray, *, radius: float,
                  density: float, youngs_modulus: float, shear_modulus: float | None = None,
                  poisson_ratio: float | None = None, damping: float = 0.0, closed: bool = False,
-                 rest_kappa: np.ndarray | None = None, internal_damping: float = 0.0) -> None:
+                 rest_kappa: np.ndarray | None = None, internal_damping: float = 0.0,
+                 stretch_modulus: float | None = None) -> None:
         self.closed = bool(closed)
         self.radius = check.positive("radius", radius, "m")
         self.density = check.positive("density", density, "kg/m^3")
         self.youngs_modulus = check.positive("youngs_modulus", youngs_modulus, "Pa")
         self.shear_modulus = shear_modulus_from(self.youngs_modulus, shear_modulus, poisson_ratio)
+        self.stretch_modulus = self.youngs_modulus if stretch_modulus is None else \
+            check.positive("stretch_modulus", stretch_modulus, "Pa")
         self._damping = check.non_negative("damping", damping, "1/s")
         self._internal_damping = check.non_negative("internal_damping", internal_damping, "s")
 
@@ -121,7 +126,7 @@ class Rod:
         self._inertia = np.outer(self.density * rest_len, [inertia, inertia, 2.0 * inertia])
         self._shear_matrix = np.tile(
             [ALPHA_SHEAR * self.shear_modulus * area, ALPHA_SHEAR * self.shear_modulus * area,
-             self.youngs_modulus * area], (ne, 1))
+             self.stretch_modulus * area], (ne, 1))
         bend_elem = np.tile([self.youngs_modulus * inertia, self.youngs_modulus * inertia,
                              self.shear_modulus * 2.0 * inertia], (ne, 1))
         la, lb = rest_len[:nv], np.roll(rest_len, -1)[:nv]
@@ -159,7 +164,7 @@ class Rod:
                  shear_modulus: float | None = None, poisson_ratio: float | None = None,
                  normal: Sequence[float] | None = None, damping: float = 0.0,
                  rest_curvature: np.ndarray | Sequence[float] | None = None,
-                 internal_damping: float = 0.0) -> "Rod":
+                 internal_damping: float = 0.0, stretch_modulus: float | None = None) -> "Rod":
         """Straight rod of ``length`` m from ``start`` along ``direction``.
 
         ``normal`` is d1 of the material frames (must be perpendicular to ``direction``);
@@ -188,7 +193,8 @@ class Rod:
         Q[:, 2] = tangents
         return cls(pos, Q, radius=radius, density=density, youngs_modulus=youngs_modulus,
                    shear_modulus=shear_modulus, poisson_ratio=poisson_ratio, damping=damping,
-                   rest_kappa=rest_curvature, internal_damping=internal_damping)
+                   rest_kappa=rest_curvature, internal_damping=internal_damping,
+                   stretch_modulus=stretch_modulus)
 
     @classmethod
     def from_points(cls, points: np.ndarray | Sequence[Sequence[float]], *, radius: float = 0.005,
@@ -196,7 +202,8 @@ class Rod:
                     shear_modulus: float | None = None, poisson_ratio: float | None = None,
                     closed: bool = False, rest_shape: str = "given",
                     normal: Sequence[float] | None = None, damping: float = 0.0,
-                    internal_damping: float = 0.0) -> "Rod":
+                    internal_damping: float = 0.0, stretch_modulus: float | None = None
+                    ) -> "Rod":
         """Rod through ``points`` (m, shape (m, 3)); one element per segment.
 
         ``closed=True`` joins the last point to the first (a ring). ``rest_shape="given"``
@@ -229,7 +236,8 @@ class Rod:
         Q = _transported_directors(tangents, d1)
         rod = cls(pts, Q, radius=radius, density=density, youngs_modulus=youngs_modulus,
                   shear_modulus=shear_modulus, poisson_ratio=poisson_ratio, damping=damping,
-                  closed=closed, internal_damping=internal_damping)
+                  closed=closed, internal_damping=internal_damping,
+                  stretch_modulus=stretch_modulus)
         if rest_shape == "given":
             rod.rest_kappa = curvature_from_directors(Q, rod.rest_voronoi_lengths, rod.closed)
         return rod
@@ -464,7 +472,8 @@ class Rod:
     def stable_dt(self) -> float:
         """A conservative explicit (Verlet) time step (s) for this rod alone."""
         return explicit_time_step(float(self.rest_lengths.min()), self.radius, self.density,
-                                  self.youngs_modulus, self.shear_modulus)
+                                  max(self.youngs_modulus, self.stretch_modulus),
+                                  self.shear_modulus)
 
     def __repr__(self) -> str:
         kind = "closed" if self.closed else "open"

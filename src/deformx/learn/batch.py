@@ -129,11 +129,14 @@ class HitTargetBatch:
             for rope, shape in zip(self.ropes, shapes):
                 rope.set_shape(shape)
         else:
-            world = dx.World(dt=cfg.rope_dt, integrator=cfg.integrator, rod_contact=False)
+            world = dx.World(dt=cfg.rope_dt, integrator=cfg.integrator, rod_contact=False,
+                             max_strain=cfg.max_strain)
             for shape, p in zip(shapes, self.params):
                 self.rods.append(world.add_rod(dx.Rod.from_points(
                     shape, radius=cfg.radius, density=p["density"],
-                    youngs_modulus=p["youngs_modulus"], damping=p["damping"])))
+                    youngs_modulus=p["youngs_modulus"], damping=p["damping"],
+                    internal_damping=cfg.internal_damping,
+                    stretch_modulus=cfg.stretch_modulus, shear_modulus=cfg.shear_modulus)))
             world.add_plane(stiffness=cfg.ground_stiffness)
             self.sim = cosim.CoSimulation(world, be)
             for i, rod in enumerate(self.rods):

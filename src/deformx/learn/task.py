@@ -31,8 +31,14 @@ class HitTargetConfig:
     n_elements: int = 20
     radius: float = 0.00635
     density: float = 700.0
-    youngs_modulus: float = 2e5
+    youngs_modulus: float = 2e5              # Pa, bending (the authors' calibrated value)
     damping: float = 0.1                     # 1/s
+    internal_damping: float = 0.0            # s, Kelvin-Voigt (stable integrator only)
+    # Pa: a rope stretches and shears like its fibres, not like its bending; None gives the
+    # authors' (E and E / 3), whose rope stretches ~100 % at the clamp at 8 m/s (docs/learning.md)
+    stretch_modulus: float | None = 2e7
+    shear_modulus: float | None = 6.7e6
+    max_strain: float = 1.0                  # element strain the engine calls a divergence
     rope_dt: float = 5e-4                    # s, Cosserat rope's step (4 per control step)
     integrator: str = "stable"               # Cosserat rope: "stable" or "verlet" (explicit)
     ground_stiffness: float = 100.0          # N/m per node
