@@ -5,8 +5,9 @@
    on with its parameters perturbed per replay (mean +- std of d_min; the stand-in for the
    paper's n = 10 real repeats),
 3. cross-model transfer - the offline stand-in for the paper's sim-to-real table: both
-   policies' trajectories replayed on a reference rope (the explicit integrator, 100 elements,
-   0.1 ms, perturbed parameters).
+   policies' trajectories replayed on a reference rope (the explicit integrator, the default
+   rope's moduli, ``--ref-elements`` elements at a step under its explicit limit, perturbed
+   parameters).
 
     python benchmarks/hit_target_results.py --steps 200000 --envs 16 --out runs
     python benchmarks/hit_target_results.py --steps 20000 --targets high --ropes cosserat
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -37,7 +39,10 @@ def main() -> None:
     parser.add_argument("--targets", nargs="+", default=list(TARGETS), choices=list(TARGETS))
     parser.add_argument("--ropes", nargs="+", default=["cosserat", "capsule"])
     parser.add_argument("--out", type=Path, default=Path("runs"))
+    parser.add_argument("--ref-elements", type=int, default=100,
+                        help="elements of the reference rope")
     args = parser.parse_args()
+    from deformx.engine.rod import explicit_time_step
     from deformx.learn.task import HitTargetConfig
     from deformx.learn.train import TrainSettings, load_trajectory, replay, train
 
@@ -53,8 +58,13 @@ def main() -> None:
             _, q = load_trajectory(out / "best_rollout.csv")
             cfg = HitTargetConfig(**task)
             same = replay(q, cfg, n=args.replays, perturb=PERTURB, seed=1)
-            ref_cfg = replace(cfg, rope="cosserat", integrator="verlet", n_elements=100,
-                              rope_dt=1e-4)
+            limit = explicit_time_step(cfg.rope_length / args.ref_elements, cfg.radius,
+                                       cfg.density, max(cfg.youngs_modulus,
+                                                        cfg.stretch_modulus or 0.0),
+                                       cfg.shear_modulus or cfg.youngs_modulus / 3.0)
+            ref_dt = 2e-3 / math.ceil(2e-3 / limit)  # the rope's explicit limit, or under
+            ref_cfg = replace(cfg, rope="cosserat", integrator="verlet",
+                              n_elements=args.ref_elements, rope_dt=ref_dt)
             ref = replay(q, ref_cfg, n=args.replays, perturb=PERTURB, seed=2)
             row = dict(target=name, rope=rope, sim=summary["d_min"], wall=wall,
                        replay=same.tolist(), reference=ref.tolist(),
