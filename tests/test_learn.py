@@ -295,3 +295,27 @@ def test_import_deformx_registers_the_environment():
             "env = gymnasium.make('deformx/HitTarget-v0', settle_time=0.02); "
             "sys.exit(env.reset(seed=0)[0].shape != (18,))")
     assert subprocess.run([sys.executable, "-c", code], timeout=300).returncode == 0
+
+
+def test_a_diverged_rope_is_cut_short_and_the_others_step_on():
+    """Batch step with one rope blown up: that member is truncated (not terminated) with its
+    last valid observation, the step is rolled back and redone for the others, bit for bit
+    as in a batch where nothing happened."""
+    from deformx.learn.vector import HitTargetVecEnv
+
+    a = HitTargetVecEnv(2, **SHORT)
+    b = HitTargetVecEnv(2, **SHORT)
+    a.reset(seed=0)
+    b.reset(seed=0)
+    act = np.full((2, 3), 0.5, dtype=np.float32)
+    for _ in range(3):
+        a.step(act)
+        ob, *_ = b.step(act)
+    before, _ = a.batch.observations(), None
+    a.batch.rods[0].velocities[5] = (1e5, 0.0, 0.0)  # blows up within the step
+    oa, ra, ta, tra, ia = a.step(act)
+    ob, rb, tb, trb, ib = b.step(act)
+    assert ia["diverged"][0] and tra[0] and not ta[0] and not ia["diverged"][1]
+    np.testing.assert_array_equal(ia["final_obs"][0], before[0])
+    np.testing.assert_array_equal(oa[1], ob[1])
+    np.testing.assert_array_equal(ra[1], rb[1])

@@ -6,8 +6,10 @@ environment a batch of ``num_envs``.
 
 Per-environment resets restore that copy's settled state: its arm's joints (and capsule
 chain) in MuJoCo and its rope through the engine's per-rod state. A rope that diverges during
-a step (a fold of more than 170 deg, see ``docs/learning.md``) rolls the whole step back, ends
-that copy's episode (``diverged``), resets it, and the others step on.
+a step (a fold of more than 170 deg, see ``docs/learning.md``) rolls the whole step back and
+cuts that copy's episode short - truncated, not terminated: the simulator could not go on, the
+task did not end, so a learner bootstraps there - keeping its last valid observation in
+:attr:`HitTargetBatch.diverged_obs`; the copy is reset and the others step on.
 """
 
 from __future__ import annotations
@@ -120,6 +122,7 @@ class HitTargetBatch:
         tops = d.xpos[self._tool].copy()
         shapes = [initial_rope(tops[i], cfg.rope_length, cfg.n_elements, cfg.radius)
                   for i in range(self.n)]
+        self.diverged_obs: dict[int, np.ndarray] = {}  # copy -> its last valid observation
         self.sim, self.rods = None, []
         self._tip_index = None  # where the ropes' tips lie in the world's buffers
         self._tip_owner = None
@@ -229,12 +232,19 @@ class HitTargetBatch:
                     break
                 except dx.SimulationDiverged as err:
                     # roll the step back, take the diverged copy out (reset), step again
+                    import mujoco
+
                     self._restore_full(before)
                     diverged[err.rod] = True
+                    mujoco.mj_kinematics(self.backend.model, self.backend.data)
+                    self.diverged_obs[err.rod] = self.observations()[err.rod]
                     self._load(err.rod, self._settled[err.rod])
                     before = self._full_state()
         self.steps += 1
-        tips, tip_v = self.tips()
+        import mujoco
+
+        mujoco.mj_kinematics(self.backend.model, self.backend.data)  # the sticks now, not
+        tips, tip_v = self.tips()                                     # one step ago
         dist = self._distances(tips)
         ok = np.flatnonzero(~diverged)
         rewards = np.zeros(self.n)
@@ -244,8 +254,8 @@ class HitTargetBatch:
         self.d[ok] = dist[ok]
         success = (self.d < cfg.success_distance) & ~diverged
         self.a_prev[:] = a
-        terminated = success | (self.d > cfg.too_far) | diverged
-        truncated = (self.steps >= cfg.episode_steps) & ~terminated
+        terminated = success | (self.d > cfg.too_far)
+        truncated = ((self.steps >= cfg.episode_steps) | diverged) & ~terminated
         return rewards, terminated, truncated, success, diverged
 
     def tips(self) -> tuple[np.ndarray, np.ndarray]:

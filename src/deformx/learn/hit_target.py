@@ -59,7 +59,9 @@ class HitTargetEnv(gym.Env):
     position (3) and velocity (3), stick-tip position (3), target (3). Action (3) in
     [-1, 1]: clipped to [0, 1], times ``config.step_limit``, added to the commanded joint
     targets, which stay in [q0, upper_limits]. ``info``: ``d`` and ``d_min`` (in the swing
-    plane, y-z), ``d_min_3d``, ``success``, ``diverged``, ``joint_targets``.
+    plane, y-z), ``d_min_3d``, ``success``, ``diverged``, ``joint_targets``. An episode ends
+    on success or d > 4 m (``terminated``), on the time limit or a diverged rope
+    (``truncated``; the observation is then the last valid one).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 50}
@@ -109,8 +111,10 @@ class HitTargetEnv(gym.Env):
             raise ValueError(f"action must hold {self.action_space.shape[0]} numbers, got "
                              f"{a.shape}")
         rewards, terminated, truncated, success, diverged = self.batch.step(a[None])
-        return (self.batch.observations()[0], float(rewards[0]), bool(terminated[0]),
-                bool(truncated[0]), self.batch.info(0, success[0], diverged[0]))
+        # a diverged rope: the episode is cut short at its last valid state
+        obs = self.batch.diverged_obs.pop(0) if diverged[0] else self.batch.observations()[0]
+        return (obs, float(rewards[0]), bool(terminated[0]), bool(truncated[0]),
+                self.batch.info(0, success[0], diverged[0]))
 
     def _reward(self, d: float, tip: np.ndarray, tip_v: np.ndarray, a: np.ndarray) -> float:
         return self.batch.reward(0, d, tip, tip_v, a)

@@ -69,7 +69,7 @@ class HitTargetVecEnv(VectorEnv):
             final_obs = np.full(self.num_envs, None, dtype=object)
             final_info: dict[str, Any] = {}
             for i in done:
-                final_obs[i] = obs[i].copy()
+                final_obs[i] = b.diverged_obs.pop(int(i)) if diverged[i] else obs[i].copy()
                 final_info = self._add_info(final_info, b.info(int(i), success[i], diverged[i]),
                                             int(i))
                 b.reset(int(i))
