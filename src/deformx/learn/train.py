@@ -4,15 +4,16 @@ trajectory a real UR5e replays open loop (CSV at the control rate), and that rep
 
 The authors' PPO (their own implementation) and SB3's nearest settings:
 
-| authors | here (SB3 PPO) |
+| authors (RL_Demo/RL/algos/ppo.py) | here (SB3 PPO) |
 | --- | --- |
-| actor and critic 18-256-128, tanh | ``net_arch=dict(pi=[256, 128], vf=[256, 128])``, ``Tanh`` |
-| Gaussian policy, fixed std 0.5 | ``log_std_init=log(0.5)``, log std frozen |
+| actor and critic 18-256-128, tanh (actor mean squashed by a last tanh) | ``net_arch=dict(pi=[256, 128], vf=[256, 128])``, ``Tanh`` (mean not squashed; actions are clipped) |
+| Gaussian policy, fixed covariance diag(0.5) ("action_std" 0.5 as a variance) | std sqrt(0.5) = 0.707, ``log_std`` frozen |
 | lr 3e-4, gamma 0.99, clip 0.2, 4 epochs | the same |
 | rollout 64 steps per environment | ``n_steps=64`` |
 | gradient clip 0.5 | ``max_grad_norm=0.5`` |
 | 4 environments | ``num_envs`` (one batch: one world, one MuJoCo model) |
-| minibatches | ``batch_size = num_envs * 64 / 4`` (four per epoch, at least 64) |
+| each epoch one full-batch gradient step | ``minibatches=1`` (``batch_size = num_envs * 64``) |
+| Monte Carlo returns, normalised; advantage = return - value | ``gae_lambda=1`` (SB3 bootstraps at the rollout's end and normalises advantages) |
 
 A run directory holds ``checkpoints/latest.zip`` (written every ``checkpoint_every`` steps by
 a rename, so a kill loses at most that much), ``episodes.csv`` (one row per finished episode,
@@ -44,7 +45,9 @@ class TrainSettings:
     learning_rate: float = 3e-4
     gamma: float = 0.99
     clip: float = 0.2
-    std: float = 0.5                         # fixed policy std
+    std: float = math.sqrt(0.5)              # fixed policy std (the authors' variance 0.5)
+    minibatches: int = 1                     # per epoch (the authors: the whole batch)
+    gae_lambda: float = 1.0
     grad_clip: float = 0.5
     seed: int = 0
     checkpoint_every: int = 20_000           # environment steps
@@ -52,7 +55,8 @@ class TrainSettings:
     task: dict = field(default_factory=dict)  # HitTargetConfig overrides (target, rope, ...)
 
     def __post_init__(self) -> None:
-        for name in ("total_steps", "num_envs", "rollout", "epochs", "checkpoint_every"):
+        for name in ("total_steps", "num_envs", "rollout", "epochs", "checkpoint_every",
+                     "minibatches"):
             v = getattr(self, name)
             if not isinstance(v, (int, np.integer)) or v < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
@@ -74,8 +78,9 @@ def make_model(settings: TrainSettings, env, tensorboard: str | None = None):
     PPO = _ppo()
     n = settings.num_envs * settings.rollout
     model = PPO("MlpPolicy", env, learning_rate=settings.learning_rate,
-                n_steps=settings.rollout, batch_size=max(64, n // 4), n_epochs=settings.epochs,
-                gamma=settings.gamma, clip_range=settings.clip, max_grad_norm=settings.grad_clip,
+                n_steps=settings.rollout, batch_size=max(2, n // settings.minibatches),
+                n_epochs=settings.epochs, gamma=settings.gamma, gae_lambda=settings.gae_lambda,
+                clip_range=settings.clip, max_grad_norm=settings.grad_clip,
                 policy_kwargs=dict(net_arch=dict(pi=[256, 128], vf=[256, 128]),
                                    activation_fn=torch.nn.Tanh,
                                    log_std_init=math.log(settings.std)),
