@@ -39,6 +39,7 @@ def main() -> None:
     parser.add_argument("--targets", nargs="+", default=list(TARGETS), choices=list(TARGETS))
     parser.add_argument("--ropes", nargs="+", default=["cosserat", "capsule"])
     parser.add_argument("--out", type=Path, default=Path("runs"))
+    parser.add_argument("--normalize", action="store_true", help="VecNormalize in training")
     parser.add_argument("--ref-elements", type=int, default=100,
                         help="elements of the reference rope")
     args = parser.parse_args()
@@ -53,7 +54,8 @@ def main() -> None:
             task = dict(target=TARGETS[name], rope=rope)
             t0 = time.perf_counter()
             summary = train(out, TrainSettings(total_steps=args.steps, num_envs=args.envs,
-                                               task=task), progress=False)
+                                               normalize=args.normalize, task=task),
+                            progress=False)
             wall = time.perf_counter() - t0
             _, q = load_trajectory(out / "best_rollout.csv")
             cfg = HitTargetConfig(**task)

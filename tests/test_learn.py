@@ -251,6 +251,19 @@ def test_train_command_writes_a_run_directory(tmp_path):
                  "best_rollout.mp4", "summary.json", "settings.json"):
         assert (out / name).is_file(), name
     assert json.loads((out / "summary.json").read_text())["timesteps"] == 1024
+    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
+                              "512", "--envs", "2", "--rope-dt", "0.002", "--out",
+                              str(tmp_path / "norm"), "--normalize", "--no-video",
+                              "--no-progress"])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "norm" / "checkpoints" / "vecnormalize.pkl").is_file()
+    assert (tmp_path / "norm" / "vecnormalize.pkl").is_file()
+    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
+                              "1024", "--envs", "2", "--rope-dt", "0.002", "--out",
+                              str(tmp_path / "norm"), "--normalize", "--no-video",
+                              "--no-progress"])  # resumes with its statistics
+    assert res.exit_code == 0, res.output
+    assert json.loads((tmp_path / "norm" / "summary.json").read_text())["timesteps"] == 1024
     res = runner.invoke(app, ["train", "hit-apple"])
     assert res.exit_code != 0 and "hit-target" in res.output
     res = runner.invoke(app, ["train", "hit-target", "--rope", "chain", "--out", str(out)])

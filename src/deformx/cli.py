@@ -434,6 +434,7 @@ def train(
                                     help="Randomise the rope's E, density and damping by +- this fraction."),
     rope_dt: Optional[float] = typer.Option(None, "--rope-dt", help="Cosserat rope step (s), a divisor of 2 ms."),
     video: bool = typer.Option(True, "--video/--no-video", help="Write best_rollout.mp4."),
+    normalize: bool = typer.Option(False, "--normalize", help="Normalise observations and rewards (SB3's VecNormalize)."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
 ) -> None:
     """Train PPO (stable-baselines3) on a task; resumable. Writes checkpoints, episodes.csv,
@@ -453,7 +454,7 @@ def train(
         overrides["rope_dt"] = rope_dt
     try:
         settings = TrainSettings(total_steps=steps, num_envs=envs, seed=seed, video=video,
-                                 task=overrides)
+                                 normalize=normalize, task=overrides)
         from .learn.task import HitTargetConfig
 
         HitTargetConfig(**overrides)  # bad task numbers fail here, before any work

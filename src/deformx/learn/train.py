@@ -16,7 +16,8 @@ The authors' PPO (their own implementation) and SB3's nearest settings:
 | Monte Carlo returns, normalised; advantage = return - value | ``gae_lambda=1`` (SB3 bootstraps at the rollout's end and normalises advantages) |
 
 A run directory holds ``checkpoints/latest.zip`` (written every ``checkpoint_every`` steps by
-a rename, so a kill loses at most that much), ``episodes.csv`` (one row per finished episode,
+a rename, so a kill loses at most that much; with ``normalize``, ``vecnormalize.pkl`` beside
+it and beside ``policy.zip``), ``episodes.csv`` (one row per finished episode,
 appended), ``tb/`` (TensorBoard), and at the end ``policy.zip``, ``learning_curve.png``,
 ``best_rollout.csv`` (time, six joint targets), ``best_rollout.mp4`` and ``summary.json``.
 """
@@ -52,6 +53,7 @@ class TrainSettings:
     seed: int = 0
     checkpoint_every: int = 20_000           # environment steps
     video: bool = True
+    normalize: bool = False                  # observations and rewards by SB3's VecNormalize
     task: dict = field(default_factory=dict)  # HitTargetConfig overrides (target, rope, ...)
 
     def __post_init__(self) -> None:
@@ -113,7 +115,9 @@ def _callback(out: Path, settings: TrainSettings, progress: bool):
             self.bar(self.num_timesteps)  # a resumed run starts where it stopped
 
         def _on_step(self) -> bool:
-            self.returns += self.locals["rewards"]
+            norm = self.model.get_vec_normalize_env()
+            self.returns += norm.get_original_reward() if norm is not None else \
+                self.locals["rewards"]
             self.lengths += 1
             for i in np.flatnonzero(self.locals["dones"]):
                 info = self.locals["infos"][i]
@@ -143,6 +147,10 @@ def save_checkpoint(model, out: Path) -> Path:
     """``checkpoints/latest.zip`` by a rename: never a half-written checkpoint."""
     ckpt = out / "checkpoints"
     ckpt.mkdir(parents=True, exist_ok=True)
+    norm = model.get_vec_normalize_env()
+    if norm is not None:  # the statistics first: a checkpoint never lacks its own
+        norm.save(ckpt / "vecnormalize.tmp.pkl")
+        os.replace(ckpt / "vecnormalize.tmp.pkl", ckpt / "vecnormalize.pkl")
     tmp = ckpt / "latest.tmp.zip"
     model.save(tmp)
     os.replace(tmp, ckpt / "latest.zip")
@@ -166,6 +174,12 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
          "task": asdict(config)}, indent=1, default=str))
     venv = SB3VecEnv(HitTargetVecEnv(settings.num_envs, config=config, seed=settings.seed))
     latest = out / "checkpoints" / "latest.zip"
+    if settings.normalize:
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        stats = out / "checkpoints" / "vecnormalize.pkl"
+        venv = VecNormalize.load(stats, venv) if resume and stats.is_file() else \
+            VecNormalize(venv, gamma=settings.gamma)
     if resume and latest.is_file():
         model = _ppo().load(latest, env=venv, device="cpu")
         model.policy.log_std.requires_grad_(False)
@@ -177,8 +191,13 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
                     reset_num_timesteps=False, tb_log_name="ppo")
         save_checkpoint(model, out)
     model.save(out / "policy.zip")
+    norm = model.get_vec_normalize_env()
+    policy = model
+    if norm is not None:
+        norm.save(out / "vecnormalize.pkl")
+        policy = lambda o: model.predict(norm.normalize_obs(o), deterministic=True)[0]  # noqa: E731
     venv.close()
-    result = rollout(model, config, video=out / "best_rollout.mp4" if settings.video else None)
+    result = rollout(policy, config, video=out / "best_rollout.mp4" if settings.video else None)
     export_trajectory(out / "best_rollout.csv", result["times"], result["joint_targets"])
     curve = plot_learning_curve(out / "episodes.csv", out / "learning_curve.png")
     summary = {"timesteps": int(model.num_timesteps), "d_min": result["d_min"],
