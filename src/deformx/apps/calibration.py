@@ -66,10 +66,10 @@ def sag_curve(a: np.ndarray, b: np.ndarray, length: float, n: int,
         s = 0.5 * (lo + hi)
         arc = np.linalg.norm(np.diff(curve(s), axis=0), axis=1).sum()
         lo, hi = (s, hi) if arc < length else (lo, s)
-    return _resample(curve(0.5 * (lo + hi)), n, exact=length / n)
+    return resample(curve(0.5 * (lo + hi)), n, exact=length / n)
 
 
-def _resample(poly: np.ndarray, n: int, exact: float | None = None) -> np.ndarray:
+def resample(poly: np.ndarray, n: int, exact: float | None = None) -> np.ndarray:
     """``n + 1`` points evenly spaced by arc length along a polyline; with ``exact`` walk
     chords of exactly that length (so a chain of rigid segments fits them)."""
     seg = np.linalg.norm(np.diff(poly, axis=0), axis=1)
@@ -97,7 +97,7 @@ def _resample(poly: np.ndarray, n: int, exact: float | None = None) -> np.ndarra
 
 def markers_along(points: np.ndarray, count: int) -> np.ndarray:
     """``count`` markers evenly spaced by arc length along the rope, both ends included."""
-    return _resample(points, count - 1)
+    return resample(points, count - 1)
 
 
 class Experiment:
@@ -239,5 +239,5 @@ def marker_error(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.linalg.norm(da - db, axis=2).mean(axis=1)
 
 
-__all__ = ["Experiment", "Setup", "marker_error", "markers_along", "run", "sag_curve",
+__all__ = ["Experiment", "Setup", "marker_error", "markers_along", "resample", "run", "sag_curve",
            "write_csv"]

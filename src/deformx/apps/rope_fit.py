@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import SimulationDiverged
 from . import calibration as cal
 
 FITTED = {"cosserat": ("youngs_modulus", "damping"),
@@ -119,9 +120,7 @@ def calibrate(markers: np.ndarray, motion: tuple, rope: str = "cosserat",
             sim = simulate(rope, replace(setup, **params), motion, times)
             e = float(cal.marker_error(sim, markers[: len(sim)]).mean()) if len(sim) == len(
                 markers) else float("inf")
-        except Exception as err:  # a diverged trial is a bad trial, not the end of the fit
-            if type(err).__name__ != "SimulationDiverged":
-                raise
+        except SimulationDiverged:  # a diverged trial is a bad trial, not the end of the fit
             e = float("inf")
         evaluations.append((params, e))
         return e if math.isfinite(e) else 1e3

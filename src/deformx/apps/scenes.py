@@ -691,6 +691,7 @@ def _looks(scene: Scene, source) -> tuple[dict, dict]:
     """Materials and cable-asset skins for the rods whose ``look`` is set (rod index ->)."""
     from ..visual import assets
     from ..visual.fast import PALETTE, world_and_sim
+    from ..visual.materials import PROCEDURAL
     from ..visual.materials import Material as Surface
 
     world, _ = world_and_sim(source)
@@ -702,7 +703,7 @@ def _looks(scene: Scene, source) -> tuple[dict, dict]:
         where = f"rods[{i}].look"
         color = look.color or PALETTE[i % len(PALETTE)]
         texture = look.texture
-        if texture is not None and texture not in ("stripe", "bands", "checker"):
+        if texture is not None and texture not in PROCEDURAL:
             path = Path(texture)
             if not path.is_absolute() and scene._base_dir is not None:
                 path = scene._base_dir / path

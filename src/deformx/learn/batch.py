@@ -202,7 +202,7 @@ class HitTargetBatch:
         self.a_prev[i] = 0.0
         self.steps[i] = 0
         tip = self.tips()[0][i]
-        self.d[i] = self.d_min[i] = self._plane_distance(tip)
+        self.d[i] = self.d_min[i] = float(self._distances(tip[None])[0])
         self.d_min_3d[i] = float(np.linalg.norm(tip - self._target))
         self.bonus_taken[i] = False
         self.touched[i] = False
@@ -287,9 +287,6 @@ class HitTargetBatch:
         if self.config.distance == "3d":
             return np.linalg.norm(tips - self._target, axis=1)
         return np.hypot(tips[:, 1] - self._target[1], tips[:, 2] - self._target[2])
-
-    def _plane_distance(self, tip: np.ndarray) -> float:
-        return float(self._distances(np.asarray(tip)[None])[0])
 
     def reward(self, i: int, d: float, tip: np.ndarray, tip_v: np.ndarray,
                a: np.ndarray) -> float:

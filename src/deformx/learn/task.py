@@ -115,9 +115,9 @@ def initial_rope(top: np.ndarray, length: float, n: int, radius: float,
                  along: np.ndarray = np.array([0.0, 1.0, 0.0])) -> np.ndarray:
     """``n + 1`` nodes exactly ``length / n`` apart (so a capsule chain fits them too) from
     ``top`` straight down to the ground (z = radius), the rest lying on it along ``along``."""
-    from ..apps.calibration import _resample
+    from ..apps.calibration import resample
 
     corner = np.array([top[0], top[1], max(float(top[2]), radius)])
     corner[2] = radius
     poly = np.array([top, corner, corner + 2.0 * length * along])
-    return _resample(poly, n, exact=length / n)
+    return resample(poly, n, exact=length / n)

@@ -244,10 +244,6 @@ class FastRenderer:
         """Instance id of every geom of the render model (0: not an instance)."""
         m = self.model
         out = np.zeros(m.ngeom, dtype=np.uint16)
-        by_name = {}
-        for entry in ids:
-            kind, rest = entry["kind"], entry["name"]
-            by_name[(kind, rest)] = entry["id"]
         for i, names in enumerate(self._rod_geoms):
             for name in names:
                 out[m.geom(name).id] = i + 1
