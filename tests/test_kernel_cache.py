@@ -101,3 +101,16 @@ def test_a_new_kernel_module_takes_part_without_registering_it(tmp_path):
     _edit(new)
     assert invalidate_stale_kernel_caches(root)
     assert not cached.exists()
+
+
+def test_a_cache_built_against_another_numpy_major_is_dropped(tmp_path, monkeypatch):
+    """A wheel's shipped cache (hatch_build.py) compiled under numpy 2 is not used under 1."""
+    import deformx._kernel_cache as kc
+
+    root, cached = _package_copy(tmp_path)
+    assert not invalidate_stale_kernel_caches(root)
+    real = kc._major
+    monkeypatch.setattr(kc, "_major", lambda p, n=1: "1" if p == "numpy" and real(p) != "1"
+                        else "2" if p == "numpy" else real(p, n))
+    assert invalidate_stale_kernel_caches(root)
+    assert not cached.exists()

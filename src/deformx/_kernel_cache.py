@@ -92,6 +92,16 @@ def _kernel_texts(root: Path) -> dict[Path, bytes]:
     return {path: sources[path] for path in sorted(chosen)}
 
 
+def _major(package: str, parts: int = 1) -> str:
+    """The first ``parts`` numbers of an installed package's version ("" if not installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return ".".join(version(package).split(".")[:parts])
+    except PackageNotFoundError:
+        return ""
+
+
 def kernel_sources(root: Path | None = None) -> list[Path]:
     """The modules under ``root`` (default: this package) whose edits can change compiled kernels."""
     return list(_kernel_texts(Path(__file__).parent if root is None else root))
@@ -102,6 +112,9 @@ def invalidate_stale_kernel_caches(root: Path | None = None) -> bool:
     True if so (also on the first call, when there is no stamp yet)."""
     root = Path(__file__).parent if root is None else root
     digest = hashlib.sha1()
+    # Compiled code may also depend on numpy's major version (its type rules) and numba's; a
+    # cache shipped in a wheel (hatch_build.py) built against other versions is dropped.
+    digest.update(f"numpy {_major('numpy')}, numba {_major('numba', 2)}".encode())
     for path, text in _kernel_texts(root).items():
         digest.update(path.relative_to(root).as_posix().encode())
         digest.update(text)

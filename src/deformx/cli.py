@@ -305,6 +305,17 @@ def render(
 
 
 @app.command()
+def precompile() -> None:
+    """Compile every kind of kernel now (``pip install .`` does this while it builds; run it
+    after an editable install or with DEFORMX_PRECOMPILE=0): a few minutes, once."""
+    from .precompile import precompile as compile_all
+
+    console.print("Compiling DeformX's numba kernels into numba's cache (once; a few minutes "
+                  "on two cores)...")
+    compile_all(echo=console.print)
+
+
+@app.command()
 def bench(
     quick: bool = typer.Option(False, "--quick", help="Fewer steps (a rough number in seconds)."),
     elastica: bool = typer.Option(True, "--elastica/--no-elastica",

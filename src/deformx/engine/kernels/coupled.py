@@ -151,7 +151,9 @@ def advance_world_implicit(n_steps, t, sim, opts, rd, env, cols, pairs):
                 if ps[p, PS_NEAR] and _find(parent, seg_rod[pairs[p, 0]]) == root:
                     plist[k] = p
                     k += 1
-            t_isl = advance_island_implicit(isl, 1, t, sim, opts, rd, env, cols,
+            # np.int64(1), not the literal 1: a literal argument would compile a second copy of
+            # the island solver (Literal[int](1)) beside advance_rods_implicit's int64 one
+            t_isl = advance_island_implicit(isl, np.int64(1), t, sim, opts, rd, env, cols,
                                             (pairs, plist, pp, ps))
             for r in isl:
                 rd.r1[R_TIMES][r] = t_isl
