@@ -24,7 +24,10 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-from hatchling.builders.hooks.plugin.interface import BuildHookInterface
+try:
+    from hatchling.builders.hooks.plugin.interface import BuildHookInterface
+except ImportError:  # benchmarks/bench_coldstart.py imports build_cache() without hatchling
+    BuildHookInterface = object
 
 PACKAGE = "deformx"
 STAMP = "deformx-sources.sha1"  # written by deformx._kernel_cache on import
@@ -55,6 +58,21 @@ def _merge_caches(into: Path, other: Path) -> None:
         raise RuntimeError(f"merging the caches failed:\n{done.stderr[-3000:]}")
 
 
+def build_cache(source: Path, work: Path, n_parts: int) -> tuple[Path, list[str]]:
+    """Copy the package at ``source`` into ``n_parts`` trees under ``work``, compile one part
+    of the kernels in each (at once) and merge their caches into the first; returns that
+    package copy and the parts' output. Raises RuntimeError if a part fails."""
+    trees = [work / f"tree{k}" for k in range(n_parts)]
+    for tree in trees:
+        shutil.copytree(source, tree / PACKAGE,
+                        ignore=shutil.ignore_patterns("__pycache__", "*.nb[ic]"))
+    with ThreadPoolExecutor(n_parts) as pool:
+        logs = list(pool.map(_compile_part, trees, range(n_parts), [n_parts] * n_parts))
+    for tree in trees[1:]:
+        _merge_caches(trees[0], tree)
+    return trees[0] / PACKAGE, logs
+
+
 class PrecompileHook(BuildHookInterface):
     PLUGIN_NAME = "custom"
 
@@ -62,28 +80,19 @@ class PrecompileHook(BuildHookInterface):
         if (self.target_name != "wheel" or version != "standard"
                 or os.environ.get("DEFORMX_PRECOMPILE", "1").strip() in ("0", "false", "no")):
             return
-        source = Path(self.root) / "src" / PACKAGE
         self._work = Path(tempfile.mkdtemp(prefix="deformx-precompile-"))
         n_parts = 2 if (os.cpu_count() or 1) >= 2 else 1
-        trees = [self._work / f"tree{k}" for k in range(n_parts)]
-        for tree in trees:
-            shutil.copytree(source, tree / PACKAGE,
-                            ignore=shutil.ignore_patterns("__pycache__", "*.nb[ic]"))
         start = time.perf_counter()
         self.app.display_info(f"deformx: compiling the numba kernels ({n_parts} processes; "
                               "DEFORMX_PRECOMPILE=0 skips this) ...")
         try:
-            with ThreadPoolExecutor(n_parts) as pool:
-                logs = list(pool.map(_compile_part, trees, range(n_parts), [n_parts] * n_parts))
-            for tree in trees[1:]:
-                _merge_caches(trees[0], tree)
+            root, logs = build_cache(Path(self.root) / "src" / PACKAGE, self._work, n_parts)
         except Exception as exc:  # never fail the install: the kernels compile on first use
             self.app.display_warning(f"deformx: kernels not precompiled ({exc}); they will "
                                      "compile on first use")
             return
         for log in logs:
             self.app.display_info(log.rstrip())
-        root = trees[0] / PACKAGE
         files = [*root.rglob("__pycache__/*.nbi"), *root.rglob("__pycache__/*.nbc"),
                  root / "__pycache__" / STAMP]
         for path in files:

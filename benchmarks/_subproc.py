@@ -119,14 +119,19 @@ def clear_in_tree_caches(tree: Path) -> int:
     return len(files)
 
 
-def run_in_tree(tree: Path, code: str, cache_dir: Path) -> tuple[dict, float]:
+def run_in_tree(tree: Path, code: str, cache_dir: Path | None) -> tuple[dict, float]:
     """Run ``PRELUDE + code`` in a fresh interpreter importing deformx from ``tree`` with
-    ``NUMBA_CACHE_DIR=cache_dir``. Returns the last ``_report(...)`` and the wall seconds of
-    the whole subprocess (interpreter start to exit)."""
-    env = dict(os.environ, PYTHONPATH=str(tree / "src"), NUMBA_CACHE_DIR=str(cache_dir),
+    ``NUMBA_CACHE_DIR=cache_dir`` (None: numba's cache next to the sources, as in an installed
+    package). Returns the last ``_report(...)`` and the wall seconds of the whole subprocess
+    (interpreter start to exit)."""
+    env = dict(os.environ, PYTHONPATH=str(tree / "src"),
                DEFORMX_BENCH_SRC=str((tree / "src" / "deformx").resolve()))
+    env.pop("NUMBA_CACHE_DIR", None)
+    if cache_dir is not None:
+        env["NUMBA_CACHE_DIR"] = str(cache_dir)
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-P", "-c", PRELUDE + code], env=env, cwd=cache_dir,
+    proc = subprocess.run([sys.executable, "-P", "-c", PRELUDE + code], env=env,
+                          cwd=tree if cache_dir is None else cache_dir,
                           capture_output=True, text=True)
     wall = time.perf_counter() - t0
     reports = [line[len(_MARK):] for line in proc.stdout.splitlines() if line.startswith(_MARK)]

@@ -15,6 +15,12 @@ Scenes (public API only, so that they run on both trees):
   c. two 40-element ropes crossing over a box mesh ((V, F) arrays from trimesh),
      ``integrator="stable"``, dt = 1e-2 s, rod contact on.
 
+Installed: what a user of ``pip install .`` sees. The wheel's build compiles the kernels
+(``hatch_build.py``: ``build_cache``, two processes, caches merged; timed once per round as the
+install's extra cost), then each scene's import + first step runs on that package copy with
+numba's cache next to its sources, as in site-packages. The reference commit has no such build
+step: its installed first step is its cold one.
+
     python benchmarks/bench_coldstart.py                       # 3 rounds, scenes a, b, c
     python benchmarks/bench_coldstart.py --quick               # 1 round, scene a
     python benchmarks/bench_coldstart.py --tree ../other --reference f69ee60 --rounds 5
@@ -22,8 +28,10 @@ Scenes (public API only, so that they run on both trees):
 
 from __future__ import annotations
 
+import shutil
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 from rich.console import Console
@@ -110,10 +118,37 @@ def cold_then_warm(tree: Path, scene: str) -> tuple[dict, dict]:
     return cold, warm
 
 
+def installed(tree: Path, scenes: str) -> tuple[float, dict[str, dict]]:
+    """The tree's wheel-build compile (seconds), then each scene's first step on its output."""
+    sys.path.insert(0, str(tree))
+    try:
+        from hatch_build import build_cache
+    finally:
+        sys.path.pop(0)
+    with tempfile.TemporaryDirectory(prefix="deformx-wheel-") as tmp:
+        t0 = time.perf_counter()
+        root, _ = build_cache(tree / "src" / "deformx", Path(tmp), 2)
+        build_s = time.perf_counter() - t0
+        fake = Path(tmp) / "site"  # run_in_tree wants <tree>/src/deformx
+        (fake / "src").mkdir(parents=True)
+        shutil.move(str(root), fake / "src" / "deformx")
+        runs = {}
+        for scene in scenes:
+            first, wall = run_in_tree(fake, probe(scene), None)
+            first["wall_s"] = wall
+            if first["cache_misses"]:
+                raise RuntimeError(f"installed, scene {scene}: {first['cache_misses']} kernels "
+                                   "compiled despite the wheel's cache")
+            runs[scene] = first
+    return build_s, runs
+
+
 def main() -> None:
     parser = tree_parser(__doc__)
     parser.add_argument("--scenes", default="abc", help="scenes to run (default: abc)")
     parser.add_argument("--quick", action="store_true", help="1 round, scene a only")
+    parser.add_argument("--no-installed", action="store_true",
+                        help="skip the installed-wheel measurement (its build takes minutes)")
     args = parser.parse_args()
     rounds, scenes = (1, "a") if args.quick else (args.rounds, args.scenes)
     if rounds < 1 or not scenes or set(scenes) - set(SCENES):
@@ -123,6 +158,7 @@ def main() -> None:
     console.print(header(tree, args.reference))
 
     runs: dict[tuple[str, str], list[tuple[dict, dict]]] = {}
+    wheel: list[tuple[float, dict[str, dict]]] = []
     with reference_tree(args.reference) as ref:
         prime(tree)  # untimed: OS file cache and .pyc files for both trees
         prime(ref)
@@ -136,6 +172,12 @@ def main() -> None:
                         f"{cold['first_step_s']:.1f} s (import {cold['import_s']:.1f} s, "
                         f"subprocess {cold['wall_s']:.1f} s, {cold['cache_misses']} compiled), "
                         f"warm {warm['first_step_s']:.2f} s (subprocess {warm['wall_s']:.1f} s)")
+            if not args.no_installed:
+                wheel.append(installed(tree, scenes))
+                console.print(f"round {k + 1}/{rounds} installed: wheel-build compile "
+                              f"{wheel[-1][0]:.0f} s, first step "
+                              + ", ".join(f"{s} {r['first_step_s']:.2f} s"
+                                          for s, r in wheel[-1][1].items()))
 
     table = Table(title="Cold start: seconds from import deformx to the end of the first step, "
                         f"empty numba cache (min-max over {rounds} round{'s' * (rounds > 1)})")
@@ -161,6 +203,25 @@ def main() -> None:
     console.print(table)
     console.print("ratio: reference cold / tree cold, per round pair; met: every tree round within "
                   "the time target, every round pair at the speed-up.")
+    if wheel:
+        table = Table(title="Installed with pip (kernels compiled while the wheel builds): "
+                            f"import + first step (min-max over {len(wheel)} round"
+                            f"{'s' * (len(wheel) > 1)})")
+        for col in ("scene", "tree installed", "reference (= its cold)", "ratio ref/tree",
+                    "target (tree)", "met"):
+            table.add_column(col, justify="left" if col == "scene" else "right")
+        for scene in scenes:
+            first = [w[1][scene]["first_step_s"] for w in wheel]
+            ref_cold = seconds(scene, "reference", 0)
+            ratios = [r / t for t, r in zip(first, ref_cold)]
+            table.add_row(f"{scene}. {SCENES[scene][0]}", span(first, "{:.2f}"), span(ref_cold),
+                          span(ratios, "{:.0f}x"), f"<= {TARGET_SECONDS[scene]:g} s, "
+                          f">= {TARGET_SPEEDUP:g}x",
+                          f"{'yes' if max(first) <= TARGET_SECONDS[scene] else 'no'}, "
+                          f"{'yes' if min(ratios) >= TARGET_SPEEDUP else 'no'}")
+        console.print(table)
+        console.print(f"the install's extra cost, compiling every kind of kernel in two processes: "
+                      f"{span([w[0] for w in wheel], '{:.0f}')} s")
     console.print(f"finished {now_and_load()}")
 
 

@@ -18,6 +18,7 @@ from deformx.engine.contact.primitives import (
     CAPSULE,
     CYLINDER,
     SPHERE,
+    bounding_gap,
     segment_deepest,
     shape_sdf,
 )
@@ -102,6 +103,27 @@ def test_segment_deepest_point_matches_dense_sampling(kind, params):
         h = 1e-6
         d2 = shape_sdf(kind, par, *(p + h * n))[0]
         assert (d2 - d) / h == pytest.approx(1.0, abs=1e-3)
+
+
+@pytest.mark.parametrize("kind,params", [(SPHERE, (0.05, 0, 0)), (BOX, (0.2, 0.1, 0.05)),
+                                          (CAPSULE, (0.05, 0.2, 0)), (CYLINDER, (0.05, 0.2, 0))])
+def test_bounding_gap_never_exceeds_the_segments_least_signed_distance(kind, params):
+    """The early-out of shape contact (a segment farther from the shape's bounding ball than
+    the contact reach is skipped) must never skip a segment that comes within reach."""
+    rng = np.random.default_rng(10 + kind)
+    par = np.array(params, dtype=float)
+    t = np.linspace(0, 1, 1001)
+    gaps = []
+    for _ in range(200):
+        a = rng.uniform(-0.6, 0.6, 3)
+        b = a + rng.normal(scale=0.2, size=3)
+        bound = bounding_gap(kind, par, *a, *b)
+        least = min(shape_sdf(kind, par, *(a + ti * (b - a)))[0] for ti in t)
+        assert bound <= least + 1e-12, (kind, a, b)
+        gaps.append(least - bound)
+    if kind == SPHERE:  # the ball is the sphere: exact up to the sampling
+        assert max(gaps) < 1e-6
+    assert np.median(gaps) < 0.25  # a bound, but not a vacuous one
 
 
 def test_primitive_input_validation():

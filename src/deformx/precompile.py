@@ -132,9 +132,9 @@ def precompile(echo: Callable[[str], None] | None = print, part: int = 0,
         raise ValueError(f"part must be in [0, {n_parts - 1}] for n_parts={n_parts}, got {part}")
     start = time.perf_counter()
     if echo is not None:
-        import numba
+        from importlib.metadata import version  # not numba's: this module defines no kernel
 
-        echo(f"part {part + 1}/{n_parts} with numba {numba.__version__}, numpy {np.__version__}")
+        echo(f"part {part + 1}/{n_parts} with numba {version('numba')}, numpy {np.__version__}")
     for k in sorted(parts(n_parts)[part]):
         name, run = KINDS[k]
         t = time.perf_counter()

@@ -44,10 +44,11 @@ def env_group(rods: Sequence, rods_p: Packed, planes: Sequence[np.ndarray],
 
 
 def cols_group(colliders: Sequence, ignored: set[tuple[int, int]], rods_p: Packed,
-               old: Packed | None) -> Packed | None:
-    """The colliders' tables (None without colliders); friction anchors and query caches
-    carry over from ``old`` when rods and colliders are the same."""
-    if not colliders:
+               old: Packed | None, empty: bool = False) -> Packed | None:
+    """The colliders' tables (without colliders: None, or empty tables if ``empty``);
+    friction anchors and query caches carry over from ``old`` when rods and colliders are the
+    same."""
+    if not colliders and not empty:
         return None
     R = rods_p["node0"].shape[0]
     N, E = rods_p["pos"].shape[0], rods_p["Q"].shape[0]

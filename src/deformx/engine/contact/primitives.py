@@ -86,6 +86,25 @@ def shape_sdf(kind, params, x, y, z):
 
 
 @njit(cache=True, error_model="numpy")
+def bounding_gap(kind, params, a0, a1, a2, b0, b1, b2):
+    """A lower bound (m) of the signed distance along local segment ab: its distance to the
+    origin less the radius of a ball about the origin that holds the shape."""
+    if kind == SPHERE:
+        radius = params[0]
+    elif kind == BOX:
+        radius = math.sqrt(params[0] * params[0] + params[1] * params[1] + params[2] * params[2])
+    elif kind == CAPSULE:
+        radius = params[0] + params[1]
+    else:
+        radius = math.sqrt(params[0] * params[0] + params[1] * params[1])
+    e0, e1, e2 = b0 - a0, b1 - a1, b2 - a2
+    ee = e0 * e0 + e1 * e1 + e2 * e2
+    s = min(max(-(a0 * e0 + a1 * e1 + a2 * e2) / ee, 0.0), 1.0) if ee > 0.0 else 0.0
+    x, y, z = a0 + s * e0, a1 + s * e1, a2 + s * e2
+    return math.sqrt(x * x + y * y + z * z) - radius
+
+
+@njit(cache=True, error_model="numpy")
 def segment_deepest(kind, params, a0, a1, a2, b0, b1, b2):
     """Parameter s in [0, 1] of the point of local segment ab with the least signed distance."""
     if kind == SPHERE or kind == CAPSULE:

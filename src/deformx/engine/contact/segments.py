@@ -36,7 +36,7 @@ from ..geometry.bvh import closest_segment_search, nearest_k_search, signed_side
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from ..kernels.refcount import NO_REFCOUNT
 from .plane import V_OUT, start_offset
-from .primitives import segment_deepest, shape_sdf
+from .primitives import bounding_gap, segment_deepest, shape_sdf
 from ..kernels.bundles import (
     N_CONTACT_FORCE,
     N_FORCE,
@@ -342,6 +342,10 @@ def _shape_closest(c, kind, pose, par, pa, pb, reach):
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
     shape = (par[c, P_SHAPE], par[c, P_SHAPE + 1], par[c, P_SHAPE + 2])
+    # The shape lies in a ball about its origin: a segment farther from that ball than
+    # ``reach`` cannot touch it (this skips the box's and cylinder's golden-section search)
+    if bounding_gap(kind, shape, la[0], la[1], la[2], lb[0], lb[1], lb[2]) > reach:
+        return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
     s = segment_deepest(kind, shape, la[0], la[1], la[2], lb[0], lb[1], lb[2])
     p0 = la[0] + s * (lb[0] - la[0])
     p1 = la[1] + s * (lb[1] - la[1])
