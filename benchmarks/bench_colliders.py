@@ -5,7 +5,8 @@ Scene: 5 rods side by side 5 cm apart along x (0.6 m, 24 elements, r 4 mm, E 2e6
 1200 kg/m^3, damping 1.5: the demo's cable), starting 1 cm above the surface under them,
 explicit steps of 4e-5 s, gravity, no rod-rod contact. Colliders: a plane at z = 0; a box
 0.8 x 0.4 x 0.1 m with its top at z = 0; plane + box: a 2 cm slab (0.8 x 0.15 m) on the plane
-under the three middle rods, the outer two on the plane; a sphere of radius 0.5 m with its top
+under the three middle rods, the outer two on the plane; plane + far box: the plane and the box
+5 m away (never within reach: what a collider costs that nothing touches); a sphere of radius 0.5 m with its top
 at z = 0; the box as a 12-triangle mesh (trimesh). Each world first runs 0.1 s (the first call
 compiles; its time is reported), then rounds interleave the cases (``world.step(n)`` timed);
 the table gives min-max over rounds.
@@ -49,6 +50,9 @@ def scene(case: str, threads: int | None) -> dx.World:
     if case == "plane + box":
         world.add_box(SLAB_HALF, pose=(0.0, 0.0, SLAB_HALF[2]))
         surface = {y: 2 * SLAB_HALF[2] if abs(y) < SLAB_HALF[1] else 0.0 for y in surface}
+    if case == "plane + far box":  # the box is never within reach: its query should cost ~0
+        world.add_plane()
+        world.add_box(BOX_HALF, pose=(5.0, 0.0, 0.0))
     if case == "sphere":
         world.add_sphere(SPHERE_R, center=(0.0, 0.0, -SPHERE_R))
     if case == "mesh":
@@ -59,7 +63,7 @@ def scene(case: str, threads: int | None) -> dx.World:
     return world
 
 
-CASES = ("none", "plane", "box", "plane + box", "sphere", "mesh")
+CASES = ("none", "plane", "box", "plane + box", "plane + far box", "sphere", "mesh")
 
 
 def main() -> None:
