@@ -99,3 +99,17 @@ def test_an_installed_wheel_steps_every_kind_of_world_without_compiling():
     """
     out = _python(code, Path(deformx.__file__).parent.parent)
     assert out.startswith("0 "), out
+
+
+def test_precompile_command_runs_every_kind():
+    """``deformx precompile`` (editable installs) steps every kind; after an install from the
+    wheel it only loads the cache."""
+    from typer.testing import CliRunner
+
+    from deformx.cli import app
+
+    result = CliRunner().invoke(app, ["precompile"])
+    assert result.exit_code == 0, result.output
+    for name, _ in KINDS:
+        assert f"{name}:" in result.output
+    assert "kernels compiled in" in result.output
