@@ -33,29 +33,30 @@ PACKAGE = "deformx"
 STAMP = "deformx-sources.sha1"  # written by deformx._kernel_cache on import
 
 
-def _compile_part(tree: Path, part: int, n_parts: int) -> str:
-    """Run one part of the precompile in ``tree`` (a copy of src/); returns its output."""
+def _precompile(tree: Path, args: list[str], timeout: float, what: str) -> str:
+    """Run ``python -m deformx.precompile ARGS`` on the package copy in ``tree`` (first on the
+    path, numba settings of the caller dropped); its log, or RuntimeError naming ``what``."""
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
     env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(tree), env.get("PYTHONPATH"))))
     env.setdefault("MPLBACKEND", "Agg")
-    done = subprocess.run([sys.executable, "-m", f"{PACKAGE}.precompile",
-                           f"--part={part + 1}/{n_parts}"],
-                          cwd=tree, env=env, capture_output=True, text=True, timeout=3600)
+    done = subprocess.run([sys.executable, "-m", f"{PACKAGE}.precompile", *args], cwd=tree,
+                          env=env, capture_output=True, text=True, timeout=timeout)
     if done.returncode != 0:
-        raise RuntimeError(f"part {part + 1}/{n_parts} failed:\n{done.stderr[-3000:]}")
+        raise RuntimeError(f"{what} failed:\n{done.stderr[-3000:]}")
     return done.stderr
+
+
+def _compile_part(tree: Path, part: int, n_parts: int) -> str:
+    """Run one part of the precompile in ``tree`` (a copy of src/); returns its output."""
+    return _precompile(tree, [f"--part={part + 1}/{n_parts}"], 3600,
+                       f"part {part + 1}/{n_parts}")
 
 
 def _merge_caches(into: Path, other: Path) -> None:
     """Add the kernels cached in the tree ``other`` to those in ``into`` (numba's index files
     hold numba and deformx types: unpickled by the package's own interpreter and path)."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, (str(into), env.get("PYTHONPATH"))))
-    done = subprocess.run([sys.executable, "-m", f"{PACKAGE}.precompile", "--merge",
-                           str(into / PACKAGE), str(other / PACKAGE)],
-                          cwd=into, env=env, capture_output=True, text=True, timeout=600)
-    if done.returncode != 0:
-        raise RuntimeError(f"merging the caches failed:\n{done.stderr[-3000:]}")
+    _precompile(into, ["--merge", str(into / PACKAGE), str(other / PACKAGE)], 600,
+                "merging the caches")
 
 
 def build_cache(source: Path, work: Path, n_parts: int) -> tuple[Path, list[str]]:

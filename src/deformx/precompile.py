@@ -27,17 +27,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+import trimesh
 
 from .engine import Rod, World
-
-
-def _box_mesh(half: float, z: float) -> tuple[np.ndarray, np.ndarray]:
-    """A closed box of half-size ``half`` centred at height ``z``: (V, F) arrays."""
-    c = np.array([[x, y, w] for x in (-1, 1) for y in (-1, 1) for w in (-1, 1)], float)
-    V = c * half + (0.0, 0.0, z)
-    F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
-    return V, F
 
 
 def _world(integrator: str, coupled: bool, colliders: bool) -> World:
@@ -54,7 +46,8 @@ def _world(integrator: str, coupled: bool, colliders: bool) -> World:
             clamp.set_acceleration(linear=(0.0, 0.0, 0.1))
     world.add_plane(static_friction=0.5, kinetic_friction=0.4)
     if colliders:
-        mesh = world.add_mesh(_box_mesh(0.02, 0.03))
+        mesh = world.add_mesh(trimesh.creation.box(extents=(0.04, 0.04, 0.04)),
+                              pose=(0.0, 0.0, 0.03))
         mesh.set_velocity(velocity=(0.0, 0.0, 0.01))
         world.add_sphere(0.02, center=(0.05, 0.0, 0.03))
         world.add_box((0.02, 0.02, 0.02), pose=np.eye(4))

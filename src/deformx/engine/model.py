@@ -20,8 +20,9 @@ GHOST_NODES, GHOST_ELEMENTS, GHOST_VORONOI = 1, 2, 3
 CONTACT_STIFFNESS_FLOOR = 1e-3  # automatic plane stiffness >= this times EA / dl
 
 
-def pack_rods(rods: Sequence, dt: float) -> Packed:
-    """The ``rods`` group of ``rods``; their state arrays become views of it."""
+def pack_rods(rods: Sequence, dt: float, stable: bool = True) -> Packed:
+    """The ``rods`` group of ``rods``; their state arrays become views of it. ``stable``:
+    room for the stable integrator's Newton system (none for explicit worlds)."""
     R = len(rods)
     nn = [r.n_nodes for r in rods]
     ne = [r.n_elements for r in rods]
@@ -29,7 +30,8 @@ def pack_rods(rods: Sequence, dt: float) -> Packed:
     N = sum(nn) + GHOST_NODES * max(R - 1, 0)
     E = sum(ne) + GHOST_ELEMENTS * max(R - 1, 0)
     V = sum(nv) + GHOST_VORONOI * max(R - 1, 0)
-    b = Packed("rods", dict(R=R, N=N, E=E, V=V, S=sum(ne), M=sum(nn), Q=N + E))
+    b = Packed("rods", dict(R=R, N=N, E=E, V=V, S=sum(ne), M=sum(nn), Q=N + E,
+                            B=N + E if stable else 0))
     b["node0"][:] = [sum(nn[:i]) + GHOST_NODES * i for i in range(R)]
     b["elem0"][:] = [sum(ne[:i]) + GHOST_ELEMENTS * i for i in range(R)]
     b["vor0"][:] = [sum(nv[:i]) + GHOST_VORONOI * i for i in range(R)]

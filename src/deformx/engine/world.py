@@ -20,7 +20,7 @@ from .contact.speculative import V_OUT
 from .drivers import Driver, DriverTable
 from .kernels import implicit, step, verlet
 from .kernels.bundles import SIM_DT, SIM_G, SIM_LEN, SIM_MAX_STRAIN, SIM_RR, SIM_SKIN, SIM_T, SIM_TOL
-from .kernels.step import advance_drivers
+from .kernels.step import advance_drivers, compiled_entry
 from .model import pack_rods, set_damping
 from .packing import Packed
 from .rod import Rod
@@ -107,7 +107,7 @@ class World:
         self._stale_env = True
         self._drivers = DriverTable()
         self._pairs = np.zeros((64, 2), dtype=np.int64)
-        self._deep: np.ndarray | None = None
+        self._args: tuple | None = None  # the kernel's arguments but the last two, one group
         self._deep_warned: set[int] = set()
 
     # ------------------------------------------------------------------ building
@@ -181,7 +181,7 @@ class World:
         for c in rod._clamps:
             self._drivers.add(c)
         # Pack now so the rod's arrays are views from here on (as documented).
-        self._rods_p = pack_rods(self._rods, self._dt)
+        self._rods_p = pack_rods(self._rods, self._dt, self.integrator == "stable")
         self._stale_rods = False
         self._stale_env = True
         return rod
@@ -346,7 +346,7 @@ class World:
     def _prepare(self) -> None:
         """Rebuild the buffers after rods, clamps, planes, colliders or dt changed."""
         if self._stale_rods:
-            self._rods_p = pack_rods(self._rods, self._dt)
+            self._rods_p = pack_rods(self._rods, self._dt, self.integrator == "stable")
             self._stale_rods = False
         self._check_damping()
         set_damping(self._rods_p, self._rods, self._dt)
@@ -369,12 +369,21 @@ class World:
         self._bufs = (rp.F, rp.I, self._env.F, self._env.I, None if cp is None else cp.F,
                       None if cp is None else cp.I)
         self._kernel = step.KERNELS[self.integrator, coupled]
-        # Deepest start penetration per rod beyond what a step resolves (stable integrator).
-        self._deep = self._rods_p["stats"][:, 5]
-        self._deep_clear = bytes(self._deep.nbytes)  # compared per step: 0.5 us, max() 1.7 us
+        self._call = self._first_call
+        self._args = (self._sim, self._opts[0], *self._bufs) if len(self._groups) == 1 else None
         self._stale_env = False
 
     # ------------------------------------------------------------------ stepping
+    @property
+    def time(self) -> float:
+        """Simulated time (s)."""
+        return self._time
+
+    @time.setter
+    def time(self, value: float) -> None:
+        self._time = float(value)
+        self._sim[SIM_T] = self._time  # where the kernels read it (and leave the new time)
+
     def step(self, n_steps: int = 1) -> None:
         """Advance ``n_steps`` time steps (one kernel call for all rods and steps)."""
         if type(n_steps) is not int or n_steps < 1:
@@ -387,31 +396,42 @@ class World:
                 self.time += n_steps * self._dt
                 return
             self._prepare()
-        self._sim[SIM_T] = self.time
-        if len(self._groups) == 1:
-            t, bad, self._pairs = self._kernel(n_steps, self._sim, self._opts[0], *self._bufs,
-                                               self._drivers.rows, self._pairs)
+        if self._args is not None:  # one group of rods: the kernel, called directly
+            t, flag, self._pairs = self._call(n_steps, *self._args, self._drivers.rows,
+                                              self._pairs)
+            if flag == -1:
+                self._time = t  # the kernel left it in self._sim too
+                return
         else:
-            t, bad = self._advance_threaded(n_steps)
-        if bad >= 0:
-            self._raise_diverged(bad)
+            t, flag = self._advance_threaded(n_steps)
+        if flag >= 0:
+            self._raise_diverged(flag)
         self.time = t
-        if self._deep is not None and self._deep.tobytes() != self._deep_clear:
+        if flag == -2:
             self._warn_deep()
+
+    def _first_call(self, n_steps: int, *args: Any) -> tuple:
+        """The kernel through numba's dispatcher (compiling or loading it), then its compiled
+        entry point for these argument types from the next call on (~1 us less per step())."""
+        out = self._kernel(n_steps, *args)
+        self._call = compiled_entry(self._kernel, (n_steps, *args))
+        return out
 
     def _warn_deep(self) -> None:
         """One warning per rod found deeper inside a collider or plane than a step resolves
         (it is pushed out at no more than 0.1 m/s; see contact/speculative.py)."""
-        for r in np.flatnonzero(self._deep > 0.0):
+        deep = self._rods_p["stats"][:, 5]
+        for r in np.flatnonzero(deep > 0.0):
             if r not in self._deep_warned:
                 self._deep_warned.add(int(r))
                 _log.warning("rod %d is %.3g m inside a collider or plane at t = %.4g s (more "
                              "than a step resolves): pushing it out at <= %g m/s", r,
-                             self._deep[r], self.time, V_OUT)
-        self._deep[:] = 0.0
+                             deep[r], self.time, V_OUT)
+        deep[:] = 0.0
 
     def _advance_threaded(self, n_steps: int) -> tuple[float, int]:
-        """Groups of rods on threads (each with its own copy of the drivers)."""
+        """Groups of rods on threads (each with its own copy of the drivers); returns the new
+        time and the kernels' flag (see :mod:`.kernels.step`)."""
         work = n_steps * int(self._rods_p["ne"].sum())
         if work >= MIN_THREADED_WORK:
             futures = [pool(len(self._groups)).submit(self._kernel, n_steps, self._sim, opts,
@@ -425,8 +445,9 @@ class World:
         step.collect_drivers(*self._bufs[2:], self._drivers.rows, len(self._rods))
         status = self._rods_p["status"]
         failed = [res[1] for res in results if res[1] >= 0]
-        bad = min(failed, key=lambda r: status[r, 2]) if failed else -1
-        return results[0][0], bad
+        if failed:
+            return results[0][0], min(failed, key=lambda r: status[r, 2])
+        return results[0][0], -2 if any(res[1] == -2 for res in results) else -1
 
     def _raise_diverged(self, r: int) -> None:
         status = self._rods_p["status"]
@@ -494,7 +515,8 @@ class World:
         if self._cols_p is not None:
             self._cols_p.set_state(state.cols)
         self._drivers.rows[:] = state.drivers
-        self._pairs = state.pairs.copy()
+        # The compiled kernel is called without numba's type checks: exact dtype and layout.
+        self._pairs = np.array(state.pairs, dtype=np.int64, order="C", ndmin=2)
         self.time = float(state.time)
         self._rods_p["status"][:, 0] = 0  # a diverged world is usable again once restored
 

@@ -12,8 +12,11 @@ import math
 
 from numba import njit
 
+from ..geometry.closest import closest_point_segment, closest_segment_segment, dist2, lerp
+
 SPHERE, BOX, CAPSULE, CYLINDER = 1, 2, 3, 4
 _GOLDEN = 0.6180339887498949
+_ORIGIN = (0.0, 0.0, 0.0)
 _SEARCH_STEPS = 48  # golden-section steps: the bracket shrinks to 1e-10 of the segment
 
 
@@ -97,40 +100,19 @@ def bounding_gap(kind, params, a0, a1, a2, b0, b1, b2):
         radius = params[0] + params[1]
     else:
         radius = math.sqrt(params[0] * params[0] + params[1] * params[1])
-    e0, e1, e2 = b0 - a0, b1 - a1, b2 - a2
-    ee = e0 * e0 + e1 * e1 + e2 * e2
-    s = min(max(-(a0 * e0 + a1 * e1 + a2 * e2) / ee, 0.0), 1.0) if ee > 0.0 else 0.0
-    x, y, z = a0 + s * e0, a1 + s * e1, a2 + s * e2
-    return math.sqrt(x * x + y * y + z * z) - radius
+    a, b = (a0, a1, a2), (b0, b1, b2)
+    return math.sqrt(dist2(lerp(a, b, closest_point_segment(_ORIGIN, a, b)), _ORIGIN)) - radius
 
 
 @njit(cache=True, error_model="numpy")
 def segment_deepest(kind, params, a0, a1, a2, b0, b1, b2):
     """Parameter s in [0, 1] of the point of local segment ab with the least signed distance."""
-    if kind == SPHERE or kind == CAPSULE:
-        # Distance to a point (sphere) or to the axis segment (capsule): closed form.
-        e0, e1, e2 = b0 - a0, b1 - a1, b2 - a2
-        ee = e0 * e0 + e1 * e1 + e2 * e2
-        if ee <= 0.0:
-            return 0.0
-        if kind == SPHERE:
-            return min(max(-(a0 * e0 + a1 * e1 + a2 * e2) / ee, 0.0), 1.0)
+    if kind == SPHERE:  # distance to a point: closed form
+        return closest_point_segment(_ORIGIN, (a0, a1, a2), (b0, b1, b2))
+    if kind == CAPSULE:  # distance to the axis segment: closed form
         half = params[1]
-        # Closest points between ab and the axis (0, 0, -half)..(0, 0, half).
-        rz = a2 + half
-        ez = 2.0 * half
-        c = e2 * ez  # e . axis
-        f = rz * ez  # axis . (a - axis start)
-        zz = ez * ez
-        er = e0 * a0 + e1 * a1 + e2 * rz
-        denom = ee * zz - c * c
-        s = min(max((c * f - er * zz) / denom, 0.0), 1.0) if denom > 1e-300 * ee * zz else 0.0
-        t = (c * s + f) / zz if zz > 0.0 else 0.0
-        if t < 0.0:
-            s = min(max(-er / ee, 0.0), 1.0)
-        elif t > 1.0:
-            s = min(max((c - er) / ee, 0.0), 1.0)
-        return s
+        return closest_segment_segment((a0, a1, a2), (b0, b1, b2), (0.0, 0.0, -half),
+                                       (0.0, 0.0, half))[0]
     lo, hi = 0.0, 1.0
     x1 = hi - _GOLDEN * (hi - lo)
     x2 = lo + _GOLDEN * (hi - lo)

@@ -23,6 +23,8 @@ from numba.core import cgutils
 from numba.extending import intrinsic, overload
 from numba.np.arrayobj import make_array, populate_array
 
+from .banded import BLOCK_BAND
+
 # Arrays of a group: (name, dtype "f" | "i", shape in symbolic dimensions, names of its rows
 # or None, state: how many of its first rows (or 1: all of a single array) are state).
 # Dimensions: R rods, N nodes, E elements, V Voronoi domains, S real segments, M real nodes,
@@ -37,10 +39,10 @@ from numba.np.arrayobj import make_array, populate_array
 # last step and contraction rate; the rod-rod
 # Verlet list's reference positions and (pairs, valid, builds, touching).
 ROD_ARRAYS = (
-    ('n3', 'f', (11, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'ref', 'fext', 'force',
-                              'contact_force', 'xp', 'extra'), 6),
-    ('e3', 'f', (10, 'E', 3), ('omega', 'wn', 'tn_el', 'J', 'inv_J', 'S', 'rest_sigma', 'text',
-                              'torque', 'stress'), 3),
+    ('n3', 'f', (12, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'ref', 'fext', 'force',
+                              'contact_force', 'xp', 'extra', 'acc'), 6),
+    ('e3', 'f', (11, 'E', 3), ('omega', 'wn', 'tn_el', 'J', 'inv_J', 'S', 'rest_sigma', 'text',
+                              'torque', 'stress', 'alpha'), 3),
     ('e33', 'f', (2, 'E', 3, 3), ('Q', 'Qn'), 2),
     ('v3', 'f', (6, 'V', 3), ('B', 'rest_kappa', 'kappa', 'couple', 'scr_C', 'scr_X'), 0),
     ('n1', 'f', (4, 'N'), ('pen_off', 'mass', 'node_radius', 'node_kmin'), 1),
@@ -59,11 +61,18 @@ ROD_ARRAYS = (
     ('status', 'i', ('R', 3), None, 0),
     ('segs', 'i', ('S',), None, 0),
     ('nodes', 'i', ('M',), None, 0),
+    # The stable integrator's Newton system, per block (a rod's nodes and elements from
+    # node0 + elem0; B = 0 for explicit worlds): matrix, residual, prescribed flags. Kept here
+    # rather than allocated per call: ~8 us less per step() of a one-rod world.
+    ('sys_A', 'f', ('B', BLOCK_BAND + 1, 3, 3), None, 0),
+    ('sys_rhs', 'f', ('B', 3), None, 0),
+    ('sys_fixed', 'i', ('B',), None, 0),
 )
 # Row indices of the stacked rod fields.
 (N_POS, N_VEL, N_XN, N_VN, N_FN_EL, N_REF, N_FEXT, N_FORCE, N_CONTACT_FORCE, N_XP,
- N_EXTRA) = range(11)
-E_OMEGA, E_WN, E_TN_EL, E_J, E_INV_J, E_S, E_REST_SIGMA, E_TEXT, E_TORQUE, E_STRESS = range(10)
+ N_EXTRA, N_ACC) = range(12)
+(E_OMEGA, E_WN, E_TN_EL, E_J, E_INV_J, E_S, E_REST_SIGMA, E_TEXT, E_TORQUE, E_STRESS,
+ E_ALPHA) = range(11)
 E_Q, E_QN = 0, 1
 V_B, V_REST_KAPPA, V_KAPPA, V_COUPLE, V_SCR_C, V_SCR_X = 0, 1, 2, 3, 4, 5
 N_PEN_OFF, N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2, 3
@@ -145,15 +154,15 @@ def _borrow(typingctx, buf, offset, shape):
     view costs two atomic operations at each, ~2 us per kernel call for a world's ~60 arrays).
     Valid while ``buf`` is, i.e. for the kernel call; never returned to Python."""
     if not (isinstance(buf, types.Array) and buf.ndim == 1 and buf.layout == "C"
-            and isinstance(offset, types.Integer) and isinstance(shape, types.UniTuple)
-            and isinstance(shape.dtype, types.Integer)):
+            and isinstance(offset, types.Integer) and isinstance(shape, types.BaseTuple)
+            and all(isinstance(d, types.Integer) for d in shape)):
         return None
-    view = types.Array(buf.dtype, shape.count, "C")
+    view = types.Array(buf.dtype, len(shape), "C")
 
     def codegen(context, builder, sig, args):
         src = make_array(sig.args[0])(context, builder, args[0])
-        dims = [context.cast(builder, d, sig.args[2].dtype, types.intp)
-                for d in cgutils.unpack_tuple(builder, args[2])]
+        dims = [context.cast(builder, d, ty, types.intp)
+                for d, ty in zip(cgutils.unpack_tuple(builder, args[2]), sig.args[2])]
         start = context.cast(builder, args[1], sig.args[1], types.intp)
         itemsize = context.get_constant(types.intp, context.get_abi_sizeof(
             context.get_data_type(view.dtype)))
@@ -167,6 +176,14 @@ def _borrow(typingctx, buf, offset, shape):
         return out._getvalue()
 
     return view(buf, offset, shape), codegen
+
+
+@njit(cache=True, inline="always")
+def borrow(buf, offset, shape):
+    """A C-contiguous ``shape`` view of the 1-D ``buf`` from ``offset`` without reference
+    counting (passing counted views costs two atomic operations each time): the caller keeps
+    ``buf`` alive while the view is used."""
+    return _borrow(buf, offset, shape)
 
 
 @njit(cache=True, inline="always")
@@ -201,7 +218,8 @@ def carve_rods(F, I):
     return Rods(_f3(F, L, 0), _f3(F, L, 1), _f4(F, L, 2), _f3(F, L, 3), _f2(F, L, 4),
                 _f2(F, L, 5), _f2(F, L, 6), _f2(F, L, 7), _f3(I, L, 8), _f2(I, L, 9),
                 _f2(I, L, 10), _f(I, L, 11), _f2(F, L, 12), _f3(F, L, 13), _f4(F, L, 14),
-                _f2(I, L, 15), _f(I, L, 16), _f(I, L, 17))
+                _f2(I, L, 15), _f(I, L, 16), _f(I, L, 17), _f4(F, L, 18), _f2(F, L, 19),
+                _f(I, L, 20))
 
 
 @njit(cache=True, inline="always")

@@ -38,8 +38,9 @@ from .lowrank import lowrank_apply, lowrank_factor
 from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
 from .bundles import (
+    borrow,
     E_DIL, E_J, E_OMEGA, E_PAIR_OFF, E_Q, E_QN, E_REST_LEN, E_S, E_STRESS, E_TEXT, E_TN_EL,
-    E_TORQUE, E_WN, N_CONTACT_FORCE,
+    E_ALPHA, E_TORQUE, E_WN, N_ACC, N_CONTACT_FORCE,
     N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VEL, N_VN, N_XN, N_XP,
     OPT_ITER, R_CLOSED, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU, R_TIMES, R_VOR0,
     SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_RR, SIM_TOL, V_B, V_KAPPA, V_REST_VOR,
@@ -320,10 +321,17 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     """
     m = pc[1].shape[0]
     K = isl.shape[0]
+    n_nodes = rd.n3[N_POS].shape[0] if m > 0 else 0
+    # The small work arrays are borrowed views of one int and one float allocation: a
+    # one-rod step() made ~25 allocations, and counted views cost two atomic operations each
+    # time they are made or passed (~4 us per call in all). Offsets, then contact-plane and
+    # rod-rod scratch.
+    nc = 3 * m  # per pair a normal column and, with friction, two tangent ones
+    ints = np.zeros(3 * (K + 1) + SP_K + 2 * n_nodes + 3 * nc, dtype=np.int64)
+    floats = np.zeros(4 * K + 12 * SP_K + 5 * nc)
     # The island's system stacks its rods' block rows; per rod its offsets in the stack.
-    boff = np.zeros(K + 1, dtype=np.int64)
-    noff = np.zeros(K + 1, dtype=np.int64)
-    eoff = np.zeros(K + 1, dtype=np.int64)
+    boff, noff, eoff = (borrow(ints, 0, (K + 1,)), borrow(ints, K + 1, (K + 1,)),
+                        borrow(ints, 2 * K + 2, (K + 1,)))
     for k in range(K):
         n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
         boff[k + 1] = boff[k] + 2 * ne + (0 if closed else 1)
@@ -331,25 +339,41 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
         eoff[k + 1] = eoff[k] + ne
     nbt = boff[K]
     offs = (boff, noff, eoff)
-    per_rod = (np.empty(K), np.empty(K), np.zeros(K), np.zeros(K))  # scale, last h, updates
+    # Per rod: scale, last sub-step, updates (this and the previous iteration).
+    per_rod = (borrow(floats, 0, (K,)), borrow(floats, K, (K,)), borrow(floats, 2 * K, (K,)),
+               borrow(floats, 3 * K, (K,)))
     # Newton matrix, residual, prescribed unknowns; the predictor's h * (last step's
-    # acceleration) per node and per element.
-    system = (np.zeros((nbt, BLOCK_BAND + 1, 3, 3)), np.zeros((nbt, 3)),
-              np.zeros(nbt, dtype=np.bool_), np.zeros((noff[K], 3)), np.zeros((eoff[K], 3)))
+    # acceleration) per node and per element. One rod: its own rows of the packed system
+    # (rods on threads never share them); an island (solved one at a time): the first rows.
+    # Written before read, but the flags.
+    b0 = n0 = e0 = 0
+    if K == 1:
+        n0, e0 = rd.ri[R_NODE0][isl[0]], rd.ri[R_ELEM0][isl[0]]
+        b0 = n0 + e0
+    fixed = rd.sys_fixed[b0:b0 + nbt]
+    fixed[:] = 0
+    system = (rd.sys_A[b0:b0 + nbt], rd.sys_rhs[b0:b0 + nbt], fixed,
+              rd.n3[N_ACC][n0:n0 + noff[K]], rd.e3[E_ALPHA][e0:e0 + eoff[K]])
     # Contact planes per slot (see contact/speculative.py): scratch.
-    keep = (np.empty(SP_K, dtype=np.int64), np.empty(SP_K), np.empty((SP_K, 8)),
-            np.empty((SP_K, 3)))
+    o, f = 3 * K + 3, 4 * K
+    keep = (borrow(ints, o, (SP_K,)), borrow(floats, f, (SP_K,)),
+            borrow(floats, f + SP_K, (SP_K, 8)), borrow(floats, f + 9 * SP_K, (SP_K, 3)))
     # Rod-rod contacts: each node's block in the stack and rod slot, the low-rank terms.
-    n_nodes = rd.n3[N_POS].shape[0] if m > 0 else 0
     # Z and S are written before they are read (each column zeroes the blocks it spans, see
-    # lowrank_factor): not zeroing them saves clearing megabytes per step in a pile. Per pair
-    # a normal column and, with friction, two tangent ones.
-    lowrank = (np.zeros(n_nodes, dtype=np.int64), np.zeros(n_nodes, dtype=np.int64),
-               np.empty((3 * m, nbt if m > 0 else 0, 3)), np.empty((3 * m, 3 * m)),
-               np.zeros(3 * m, dtype=np.int64), np.zeros((3 * m, 3)), np.zeros(3 * m),
-               np.zeros((3 * m, 2), dtype=np.int64), np.zeros(3 * m))
-    return _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc,
-                           (offs, per_rod, system, keep, lowrank))
+    # lowrank_factor): not zeroing them saves clearing megabytes per step in a pile.
+    o, f = o + SP_K, f + 12 * SP_K
+    big = np.empty(nc * nbt * 3 + nc * nc if m > 0 else 0)
+    Z, S = borrow(big, 0, (nc, nbt if m > 0 else 0, 3)), borrow(big, nc * nbt * 3, (nc, nc))
+    o2 = o + 2 * n_nodes
+    lowrank = (borrow(ints, o, (n_nodes,)), borrow(ints, o + n_nodes, (n_nodes,)), Z, S,
+               borrow(ints, o2, (nc,)), borrow(floats, f, (nc, 3)),
+               borrow(floats, f + 3 * nc, (nc,)), borrow(ints, o2 + nc, (nc, 2)),
+               borrow(floats, f + 4 * nc, (nc,)))
+    t = _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc,
+                        (offs, per_rod, system, keep, lowrank))
+    # The borrowed views' owners live until here.
+    ints[0] = floats[0] = big.size
+    return t
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
@@ -813,8 +837,9 @@ def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, rd, env, cols, 
     own copy of the drivers (loaded from ``drv`` first when ``load``); releases the GIL so
     threads can share rods."""
     isl = np.empty(1, dtype=np.int64)
-    pc = (np.empty((0, 2), dtype=np.int64), np.empty(0, dtype=np.int64),
-          np.empty((0, PP_COLS)), np.empty((0, PS_COLS), dtype=np.int64))
+    no_pairs = np.empty(1)  # borrowed empty views (see advance_island_implicit)
+    pc = (borrow(isl, 0, (0, 2)), borrow(isl, 0, (0,)), borrow(no_pairs, 0, (0, PP_COLS)),
+          borrow(isl, 0, (0, PS_COLS)))
     for r in range(r_begin, r_end):
         if load:
             copy_drivers(env.dloc[r], drv)

@@ -3,12 +3,14 @@
 They take only the world's buffers (a numba call costs ~0.1 us per array argument), carve
 them into bundles (:mod:`.bundles`), advance the rods (together when they touch each other,
 else each on its own) and the drivers, and return the new time, the first rod that diverged
-(-1: none) and the rod-rod pair list (grown when it filled up).
+(-1: none; -2: none, but a rod started deeper inside a collider than a step resolves) and
+the rod-rod pair list (grown when it filled up). The new time is also left in ``sim``.
 """
 
 from __future__ import annotations
 
-from numba import njit
+from numba import njit, typeof
+from numba.core.typing.typeof import Purpose
 
 from .bundles import (
     OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, R_NE, R_TIMES, SIM_T, carve_cols,
@@ -21,15 +23,22 @@ from .verlet import OK, advance_rods
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _finish(n_steps, opts, rd, env, cols, drv):
-    """Drivers back from the rods' copies; the rod that failed first, or -1."""
+def _finish(t, sim, opts, rd, env, cols, drv):
+    """Drivers back from the rods' copies and the time into ``sim`` (one group: groups on
+    threads leave both to the caller); the rod that failed first, else -2 if a rod is found
+    deep inside a collider (``stats[r, 5]``, warned about in Python), else -1."""
     r0, r1 = opts[OPT_R0], opts[OPT_R1]
     if opts[OPT_STORE]:
         store_drivers(drv, env, cols, r0, r1)
+        sim[SIM_T] = t
     bad = -1
     for r in range(r0, r1):
         if rd.status[r, 0] != OK and (bad < 0 or rd.status[r, 2] < rd.status[bad, 2]):
             bad = r
+    if bad < 0:
+        for r in range(r0, r1):
+            if rd.stats[r, 5] != 0.0:
+                return -2
     return bad
 
 
@@ -42,7 +51,8 @@ def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     cols = carve_cols(CF, CI)
     advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, rd, env, cols, drv,
                  opts[OPT_LOAD] != 0)
-    return rd.r1[R_TIMES][opts[OPT_R0]], _finish(n_steps, opts, rd, env, cols, drv), pairs
+    t = rd.r1[R_TIMES][opts[OPT_R0]]
+    return t, _finish(t, sim, opts, rd, env, cols, drv), pairs
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -55,7 +65,8 @@ def step_verlet_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
         copy_drivers(env.dloc[r], drv)
     cols = carve_cols(CF, CI)
     pairs = advance_world_verlet(n_steps, sim[SIM_T], sim, rd, env, cols, pairs)
-    return rd.r1[R_TIMES][0], _finish(n_steps, opts, rd, env, cols, drv), pairs
+    t = rd.r1[R_TIMES][0]
+    return t, _finish(t, sim, opts, rd, env, cols, drv), pairs
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -67,7 +78,8 @@ def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     cols = carve_cols(CF, CI)
     advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, opts, rd, env,
                           cols, drv, opts[OPT_LOAD] != 0)
-    return rd.r1[R_TIMES][opts[OPT_R0]], _finish(n_steps, opts, rd, env, cols, drv), pairs
+    t = rd.r1[R_TIMES][opts[OPT_R0]]
+    return t, _finish(t, sim, opts, rd, env, cols, drv), pairs
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -80,7 +92,8 @@ def step_stable_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
         copy_drivers(env.dloc[r], drv)
     cols = carve_cols(CF, CI)
     pairs = advance_world_implicit(n_steps, sim[SIM_T], sim, opts, rd, env, cols, pairs)
-    return rd.r1[R_TIMES][0], _finish(n_steps, opts, rd, env, cols, drv), pairs
+    t = rd.r1[R_TIMES][0]
+    return t, _finish(t, sim, opts, rd, env, cols, drv), pairs
 
 
 # (integrator, rods touch each other) -> entry kernel. A world compiles only the one it uses:
@@ -101,3 +114,14 @@ def advance_drivers(drv, n_steps, dt) -> None:
     for _ in range(n_steps):
         begin_step(drv, dt)
         end_step(drv, dt)
+
+
+def compiled_entry(kernel, args: tuple):
+    """The compiled code of ``kernel`` for the types of ``args``, callable without numba's
+    dispatch (which types every argument at each call: ~1 us of a one-rod ``step()``); the
+    kernel itself where numba keeps no such entry. Only for calls with arguments of exactly
+    these types."""
+    try:
+        return kernel.overloads[tuple(typeof(a, Purpose.argument) for a in args)].entry_point
+    except (AttributeError, KeyError):
+        return kernel
