@@ -316,8 +316,9 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     the rods share one Newton iteration, so each sees the others' end-of-step positions.
     Each rod sees the drivers as ``env.dloc[r]`` (advanced here).
 
-    This allocates the island's work arrays; the steps run in ``_advance_island``, compiled
-    without reference counting (it passes the rod bundle to a dozen calls per iteration).
+    This sets up the island's work arrays (the Newton system in the packed rod buffers, the
+    rest in two allocations); the steps run in ``_advance_island``, compiled without reference
+    counting (it passes the rod bundle to a dozen calls per iteration).
     """
     m = pc[1].shape[0]
     K = isl.shape[0]
