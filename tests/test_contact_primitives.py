@@ -94,6 +94,7 @@ def test_segment_deepest_point_matches_dense_sampling(kind, params):
         f = shape_sdf(kind, par, *(a + s * (b - a)))[0]
         fine = np.array([shape_sdf(kind, par, *(a + ti * (b - a)))[0] for ti in t])
         assert f <= fine.min() + 1e-9, (kind, a, b, s)
+        assert segment_deepest(kind, par, *a, *a) == 0.0  # a node's query: a point
     # Normals are unit and point along the distance gradient.
     for _ in range(100):
         p = rng.uniform(-0.3, 0.3, 3)

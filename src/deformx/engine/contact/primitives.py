@@ -16,8 +16,12 @@ from ..geometry.closest import closest_point_segment, closest_segment_segment, d
 
 SPHERE, BOX, CAPSULE, CYLINDER = 1, 2, 3, 4
 _GOLDEN = 0.6180339887498949
+_LOG_GOLDEN = math.log(_GOLDEN)
 _ORIGIN = (0.0, 0.0, 0.0)
-_SEARCH_STEPS = 48  # golden-section steps: the bracket shrinks to 1e-10 of the segment
+_SEARCH_STEPS = 48  # golden-section steps at most: the bracket shrinks to 1e-10 of the segment
+# The search stops once the bracket is this short (m): at a kink of the distance (a box's edge)
+# the deepest distance found is then within twice this, elsewhere within far less.
+_SEARCH_TOL = 1e-10
 
 
 @njit(cache=True, error_model="numpy")
@@ -113,12 +117,16 @@ def segment_deepest(kind, params, a0, a1, a2, b0, b1, b2):
         half = params[1]
         return closest_segment_segment((a0, a1, a2), (b0, b1, b2), (0.0, 0.0, -half),
                                        (0.0, 0.0, half))[0]
+    length = math.sqrt((b0 - a0) ** 2 + (b1 - a1) ** 2 + (b2 - a2) ** 2)
+    if length <= _SEARCH_TOL:  # a point (a node's query): nothing to search
+        return 0.0
+    steps = min(_SEARCH_STEPS, int(math.ceil(math.log(_SEARCH_TOL / length) / _LOG_GOLDEN)))
     lo, hi = 0.0, 1.0
     x1 = hi - _GOLDEN * (hi - lo)
     x2 = lo + _GOLDEN * (hi - lo)
     f1 = shape_sdf(kind, params, a0 + x1 * (b0 - a0), a1 + x1 * (b1 - a1), a2 + x1 * (b2 - a2))[0]
     f2 = shape_sdf(kind, params, a0 + x2 * (b0 - a0), a1 + x2 * (b1 - a1), a2 + x2 * (b2 - a2))[0]
-    for _ in range(_SEARCH_STEPS):
+    for _ in range(steps):
         if f1 <= f2:
             hi = x2
             x2, f2 = x1, f1

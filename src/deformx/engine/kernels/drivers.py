@@ -52,12 +52,17 @@ def exp_times(w0, w1, w2, tau, R):
 
 
 @njit(cache=True, error_model="numpy")
-def copy_drivers(dst, src) -> None:
-    """dst[:] = src for driver tables, as plain loops (numba's slice assignment costs ~1 us
-    per call here)."""
-    for d in range(src.shape[0]):
-        for j in range(src.shape[1]):
-            dst[d, j] = src[d, j]
+def load_drivers(dl, drv, r, env, cols) -> None:
+    """Rod ``r``'s copy of the drivers it uses (its clamps', the colliders') from the table:
+    copying every row for every rod cost O(rods x drivers) per call in a batch of
+    environments, each with its own clamp."""
+    for c in range(env.rod_pcon[r], env.rod_pcon[r + 1]):
+        _copy_row(dl, drv, env.pcon_drv[c])
+    for c in range(env.rod_fcon[r], env.rod_fcon[r + 1]):
+        _copy_row(dl, drv, env.fcon_drv[c])
+    if cols is not None:
+        for c in range(cols.kind.shape[0]):
+            _copy_row(dl, drv, cols.drv[c])
 
 
 @njit(cache=True, inline="always", error_model="numpy")

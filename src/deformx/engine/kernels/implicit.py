@@ -49,7 +49,7 @@ from .drivers import (
     add_frame_reaction,
     add_impulse,
     add_node_reaction,
-    copy_drivers,
+    load_drivers,
     step_rod_drivers,
     clamp_rates,
     clamp_values,
@@ -843,6 +843,6 @@ def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, rd, env, cols, 
           borrow(isl, 0, (0, PS_COLS)))
     for r in range(r_begin, r_end):
         if load:
-            copy_drivers(env.dloc[r], drv)
+            load_drivers(env.dloc[r], drv, r, env, cols)
         isl[0] = r
         rd.r1[R_TIMES][r] = advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc)

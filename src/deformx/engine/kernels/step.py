@@ -17,7 +17,7 @@ from .bundles import (
     carve_env, carve_rods,
 )
 from .coupled import advance_world_implicit, advance_world_verlet
-from .drivers import begin_step, copy_drivers, end_step, store_drivers
+from .drivers import begin_step, end_step, load_drivers, store_drivers
 from .implicit import advance_rods_implicit
 from .verlet import OK, advance_rods
 
@@ -61,9 +61,9 @@ def step_verlet_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     time); returns (time, failed rod or -1, pairs)."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
-    for r in range(rd.ri[R_NE].shape[0]):
-        copy_drivers(env.dloc[r], drv)
     cols = carve_cols(CF, CI)
+    for r in range(rd.ri[R_NE].shape[0]):
+        load_drivers(env.dloc[r], drv, r, env, cols)
     pairs = advance_world_verlet(n_steps, sim[SIM_T], sim, rd, env, cols, pairs)
     t = rd.r1[R_TIMES][0]
     return t, _finish(t, sim, opts, rd, env, cols, drv), pairs
@@ -88,9 +88,9 @@ def step_stable_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     -1, pairs)."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
-    for r in range(rd.ri[R_NE].shape[0]):
-        copy_drivers(env.dloc[r], drv)
     cols = carve_cols(CF, CI)
+    for r in range(rd.ri[R_NE].shape[0]):
+        load_drivers(env.dloc[r], drv, r, env, cols)
     pairs = advance_world_implicit(n_steps, sim[SIM_T], sim, opts, rd, env, cols, pairs)
     t = rd.r1[R_TIMES][0]
     return t, _finish(t, sim, opts, rd, env, cols, drv), pairs

@@ -28,7 +28,7 @@ from .drivers import (
     add_frame_reaction,
     add_impulse,
     add_node_reaction,
-    copy_drivers,
+    load_drivers,
     step_rod_drivers,
     clamp_rate,
     clamp_rates,
@@ -291,6 +291,6 @@ def advance_rods(r_begin, r_end, n_steps, t, sim, rd, env, cols, drv, load):
     for r in range(r_begin, r_end):
         dl = env.dloc[r]
         if load:
-            copy_drivers(dl, drv)
+            load_drivers(dl, drv, r, env, cols)
         rd.r1[R_TIMES][r] = advance_rod(r, n_steps, t, sim, rd, env, cols, dl, False,
                                   False, False)
