@@ -199,6 +199,17 @@ def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _n_queries(nn, ne, cols):
+    """How many of a rod's slots can hold a plane: its nodes and, with colliders, its
+    segments (world planes act on nodes only; colliders are never removed, so without any a
+    segment slot stays empty and is not walked)."""
+    n_cols = 0
+    if cols is not None:
+        n_cols = cols.kind.shape[0]
+    return nn + ne if n_cols > 0 else nn
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def _slot(k, n0, nn, e0, n_nodes, node_radius):
     """The ``k``-th query of a rod (its nodes, then its elements): whether it is a node, its
     end nodes a, b (a == b for a node), element (-1 for a node), slot and radius (m)."""
@@ -232,7 +243,7 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
     if cols is not None:
         pose3 = cols.pose[r]
     found = 0
-    for k in range(nn + ne):
+    for k in range(_n_queries(nn, ne, cols)):
         node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
         pa = (X[a, 0], X[a, 1], X[a, 2])
         pb = (X[b, 0], X[b, 1], X[b, 2])
@@ -368,7 +379,7 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
             for j in range(6):
                 cols.wrench[r, c, j] = 0.0
     count = 0
-    for k in range(nn + ne):
+    for k in range(_n_queries(nn, ne, cols)):
         node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
         for j in range(SP_K):
             src = sp_i[slot, j, SP_SRC]
@@ -504,7 +515,7 @@ def start_penetrations(r, n0, nn, e0, ne, h, X, planes, rd, cols, sp_i, sp_f, n_
     pose = rd.e33[0]  # as in plane_forces
     if cols is not None:
         pose = cols.pose[r]
-    for k in range(nn + ne):
+    for k in range(_n_queries(nn, ne, cols)):
         node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
         for j in range(SP_K):
             src = sp_i[slot, j, SP_SRC]
