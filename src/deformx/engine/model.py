@@ -80,18 +80,28 @@ def pack_rods(rods: Sequence, dt: float, stable: bool = True) -> Packed:
         segs.extend(range(e0, e0 + ne[i]))
         nodes.extend(range(n0, n0 + nn[i]))
         # Move the state in, then make the rod's arrays views of the buffers.
-        for name, field, sl in (("_positions", "pos", n), ("_velocities", "vel", n),
-                                ("_external_forces", "fext", n), ("_directors", "Q", e),
-                                ("_angular_velocities", "omega", e),
-                                ("_external_torques", "text", e)):
+        for name, field, sl in _rod_views(n, e):
             b[field][sl] = getattr(rod, name)
-            setattr(rod, name, b[field][sl])
-        # Parameters stay shared too, so edits of rest shape after packing take effect.
-        rod.rest_kappa = b["rest_kappa"][v]
-        rod.rest_sigma = b["rest_sigma"][e]
+        bind_rod(b, rod, i)
     b["segs"][:] = segs
     b["nodes"][:] = nodes
     return b
+
+
+def _rod_views(n: slice, e: slice) -> tuple:
+    return (("_positions", "pos", n), ("_velocities", "vel", n), ("_external_forces", "fext", n),
+            ("_directors", "Q", e), ("_angular_velocities", "omega", e),
+            ("_external_torques", "text", e))
+
+
+def bind_rod(b: Packed, rod, i: int) -> None:
+    """Make rod ``i``'s state arrays (and rest curvature and stretch) views of ``b``."""
+    n0, e0, v0 = int(b["node0"][i]), int(b["elem0"][i]), int(b["vor0"][i])
+    for name, field, sl in _rod_views(slice(n0, n0 + rod.n_nodes), slice(e0, e0 + rod.n_elements)):
+        setattr(rod, name, b[field][sl])
+    # Parameters stay shared too, so edits of rest shape after packing take effect.
+    rod.rest_kappa = b["rest_kappa"][v0:v0 + rod.rest_voronoi_lengths.shape[0]]
+    rod.rest_sigma = b["rest_sigma"][e0:e0 + rod.n_elements]
 
 
 def set_damping(b: Packed, rods: Sequence, dt: float) -> None:

@@ -37,12 +37,19 @@ class Packed:
         self.I = np.zeros(size["i"], dtype=np.int64)
         self.I[0] = len(spec)
         self.I[1:header] = layout.ravel()
+        self._carve()
+
+    def _carve(self) -> None:
+        """The views of every array and field, from the layout at the head of ``I``."""
+        spec = GROUPS[self.group]
+        layout = self.I[1:1 + _HEAD * len(spec)].reshape(len(spec), _HEAD)
         self.arrays: dict[str, np.ndarray] = {}
         self.fields: dict[str, np.ndarray] = {}
         self.axes: dict[str, str | int] = {}  # a field's first (per-item) dimension
         self._state: list[np.ndarray] = []
         self._state_names: list[str] = []
-        for k, ((name, kind, sym, rows, n_state), shape) in enumerate(zip(spec, shapes)):
+        for k, (name, kind, sym, rows, n_state) in enumerate(spec):
+            shape = tuple(int(d) for d in layout[k, 1:1 + len(spec[k][2])])
             buf = self.F if kind == "f" else self.I
             o = int(layout[k, 0])
             arr = buf[o:o + int(np.prod(shape))].reshape(shape)
@@ -60,6 +67,15 @@ class Packed:
                     if j < n_state:
                         self._state.append(self.fields[row])
                         self._state_names.append(row)
+
+    # Copies and pickles hold the two buffers only; the views are carved again from them
+    # (a deep copy of the views would give arrays no longer backed by the buffers).
+    def __getstate__(self) -> dict:
+        return {"group": self.group, "F": self.F, "I": self.I}
+
+    def __setstate__(self, state: dict) -> None:
+        self.group, self.F, self.I = state["group"], state["F"], state["I"]
+        self._carve()
 
     def __getitem__(self, name: str) -> np.ndarray:
         return self.fields[name]

@@ -21,7 +21,7 @@ from .drivers import Driver, DriverTable
 from .kernels import implicit, step, verlet
 from .kernels.bundles import SIM_DT, SIM_G, SIM_LEN, SIM_MAX_STRAIN, SIM_RR, SIM_SKIN, SIM_T, SIM_TOL
 from .kernels.step import advance_drivers, compiled_entry
-from .model import pack_rods, set_damping
+from .model import bind_rod, pack_rods, set_damping
 from .packing import Packed
 from .rod import Rod
 from .state import WorldState, put_rod, rod_slices, take_rod
@@ -365,13 +365,34 @@ class World:
         self._groups = ([(0, len(self._rods))] if coupled
                         else balanced_groups(rp["ne"], self.threads))
         self._opts = assemble.run_options(self._groups, self.iterations)
-        cp = self._cols_p
+        self._coupled = coupled
+        self._bind_kernel()
+        self._stale_env = False
+
+    def _bind_kernel(self) -> None:
+        """The kernel for this world and the tuple of buffers it is called with."""
+        rp, cp = self._rods_p, self._cols_p
         self._bufs = (rp.F, rp.I, self._env.F, self._env.I, None if cp is None else cp.F,
                       None if cp is None else cp.I)
-        self._kernel = step.KERNELS[self.integrator, coupled]
+        self._kernel = step.KERNELS[self.integrator, self._coupled]
         self._call = self._first_call
         self._args = (self._sim, self._opts[0], *self._bufs) if len(self._groups) == 1 else None
-        self._stale_env = False
+
+    # A copy or pickle (RL branching, multiprocessing) holds the buffers and handles; the
+    # compiled entry point is looked up again, and the rods' arrays become views again.
+    _UNPICKLED = ("_call", "_args", "_kernel", "_bufs")
+
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k not in self._UNPICKLED}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._args = None
+        if self._rods_p is not None:
+            for i, rod in enumerate(self._rods):
+                bind_rod(self._rods_p, rod, i)
+        if not (self._stale_env or self._stale_rods):
+            self._bind_kernel()
 
     # ------------------------------------------------------------------ stepping
     @property
