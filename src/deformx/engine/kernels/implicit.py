@@ -363,7 +363,8 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     # Z and S are written before they are read (each column zeroes the blocks it spans, see
     # lowrank_factor): not zeroing them saves clearing megabytes per step in a pile.
     o, f = o + SP_K, f + 12 * SP_K
-    big = np.empty(nc * nbt * 3 + nc * nc if m > 0 else 0)
+    # (no pairs: empty views of ``floats``, no allocation)
+    big = np.empty(nc * nbt * 3 + nc * nc) if m > 0 else floats
     Z, S = borrow(big, 0, (nc, nbt if m > 0 else 0, 3)), borrow(big, nc * nbt * 3, (nc, nc))
     o2 = o + 2 * n_nodes
     lowrank = (borrow(ints, o, (n_nodes,)), borrow(ints, o + n_nodes, (n_nodes,)), Z, S,
@@ -838,8 +839,8 @@ def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, rd, env, cols, 
     own copy of the drivers (loaded from ``drv`` first when ``load``); releases the GIL so
     threads can share rods."""
     isl = np.empty(1, dtype=np.int64)
-    no_pairs = np.empty(1)  # borrowed empty views (see advance_island_implicit)
-    pc = (borrow(isl, 0, (0, 2)), borrow(isl, 0, (0,)), borrow(no_pairs, 0, (0, PP_COLS)),
+    # No pairs: empty views borrowed from arrays alive for the call.
+    pc = (borrow(isl, 0, (0, 2)), borrow(isl, 0, (0,)), borrow(sim, 0, (0, PP_COLS)),
           borrow(isl, 0, (0, PS_COLS)))
     for r in range(r_begin, r_end):
         if load:

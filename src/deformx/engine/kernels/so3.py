@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit
 
 _SMALL = 0.05  # rad; below it the truncated series are exact to double precision
+_R6, _R12, _R20, _R30, _R42, _R56, _R72, _R90 = (1.0 / k for k in (6, 12, 20, 30, 42, 56, 72, 90))
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -20,8 +21,9 @@ def rodrigues_coefficients(t2: float) -> tuple[float, float]:
     """(sin(t)/t, (1 - cos t)/t^2) for t^2 = ``t2``, by series below ``_SMALL`` (exact to
     double precision there, and no sqrt, division or sin/cos)."""
     if t2 < _SMALL * _SMALL:
-        s = 1.0 - t2 / 6.0 * (1.0 - t2 / 20.0 * (1.0 - t2 / 42.0 * (1.0 - t2 / 72.0)))
-        c = 0.5 * (1.0 - t2 / 12.0 * (1.0 - t2 / 30.0 * (1.0 - t2 / 56.0 * (1.0 - t2 / 90.0))))
+        # Products with reciprocals: eight divisions cost a third of a director update.
+        s = 1.0 - t2 * _R6 * (1.0 - t2 * _R20 * (1.0 - t2 * _R42 * (1.0 - t2 * _R72)))
+        c = 0.5 * (1.0 - t2 * _R12 * (1.0 - t2 * _R30 * (1.0 - t2 * _R56 * (1.0 - t2 * _R90))))
         return s, c
     theta = math.sqrt(t2)
     return math.sin(theta) / theta, (1.0 - math.cos(theta)) / t2

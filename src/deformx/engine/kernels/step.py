@@ -45,7 +45,7 @@ def _finish(t, sim, opts, rd, env, cols, drv):
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` explicit steps of rods that do not touch each other (each on its own, all
-    its steps at once); returns (time, failed rod or -1, pairs)."""
+    its steps at once); returns (time, flag, pairs), flag as in the module's docstring."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
@@ -58,7 +58,7 @@ def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_verlet_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` explicit steps of rods that touch each other (all rods, one step at a
-    time); returns (time, failed rod or -1, pairs)."""
+    time); returns (time, flag, pairs), flag as in the module's docstring."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
@@ -72,7 +72,7 @@ def step_verlet_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` stable (backward-Euler) steps of rods that do not touch each other;
-    returns (time, failed rod or -1, pairs)."""
+    returns (time, flag, pairs), flag as in the module's docstring."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
@@ -84,8 +84,8 @@ def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_stable_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
-    """``n_steps`` stable steps of rods that touch each other; returns (time, failed rod or
-    -1, pairs)."""
+    """``n_steps`` stable steps of rods that touch each other; returns (time, flag, pairs),
+    flag as in the module's docstring."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
