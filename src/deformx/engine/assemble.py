@@ -57,11 +57,10 @@ def cols_group(colliders: Sequence, ignored: set[tuple[int, int]], rods_p: Packe
         allowed[r, c] = 0
     packed = col.pack(colliders, R, N, N + E, allowed)
     packed["drv"][:] = [c._driver for c in colliders]
-    if old is not None:
-        try:
-            packed.set_state(old.state())
-        except ValueError:  # other sizes: start afresh
-            pass
+    if old is not None:  # fields of another size (rods, or the first mesh, added) start afresh
+        for name in packed.state_fields():
+            if old[name].shape == packed[name].shape:
+                packed[name][...] = old[name]
     return packed
 
 

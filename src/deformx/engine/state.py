@@ -25,6 +25,11 @@ class WorldState:
     pairs: np.ndarray
 
 
+# Symbolic dimensions that run over query slots (see kernels/bundles.py); an array sized 0
+# along one (unused in that world) slices to empty pieces.
+SLOT_AXES = ("Q", "QM", "QA")
+
+
 def rod_slices(packed_rods, r: int, rod) -> dict[str, slice]:
     """Index ranges of rod ``r`` along each symbolic dimension of the state fields."""
     n0 = int(packed_rods["node0"][r])
@@ -41,7 +46,7 @@ def take_rod(packed, sl: dict[str, slice]) -> dict[str, np.ndarray]:
     out = {}
     for name in packed.state_fields():
         axis, arr = packed.axes[name], packed[name]
-        if axis == "Q":  # query slots: the rod's nodes, then its elements
+        if axis in SLOT_AXES:  # query slots: the rod's nodes, then its elements
             out[name] = np.concatenate([arr[sl["Qn"]], arr[sl["Qe"]]])
         elif axis in sl:
             out[name] = arr[sl[axis]].copy()
@@ -53,7 +58,7 @@ def put_rod(packed, sl: dict[str, slice], values: dict[str, np.ndarray]) -> None
         if name not in values:
             continue
         axis, arr = packed.axes[name], packed[name]
-        if axis == "Q":
+        if axis in SLOT_AXES:
             nq = sl["Qn"].stop - sl["Qn"].start
             arr[sl["Qn"]] = values[name][:nq]
             arr[sl["Qe"]] = values[name][nq:]

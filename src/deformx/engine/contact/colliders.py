@@ -309,7 +309,9 @@ def pack(colliders: Sequence[Collider], n_rods: int, n_nodes: int, n_slots: int,
         nv += V.shape[0]
         nf += F.shape[0]
         nb += bvh.lo.shape[0]
-    b = Packed("cols", dict(C=C, R=n_rods, N=n_nodes, Q=n_slots, nv=nv, nf=nf, nb=nb))
+    meshes = any(c._mesh is not None for c in colliders)
+    b = Packed("cols", dict(C=C, R=n_rods, N=n_nodes, Q=n_slots, QM=n_slots if meshes else 0,
+                            QA=n_slots if C else 0, nv=nv, nf=nf, nb=nb))
     b["kind"][:] = [KINDS[c.kind] for c in colliders]
     b["par"][:] = np.array([c._params for c in colliders]).reshape(C, N_PAR)
     b["rng"][:] = rng

@@ -100,13 +100,16 @@ ENV = (
     ("dreact", "f", ("R", "D", 6), None, 0),
     ("dimp", "f", ("R", "D", 6), None, 0),
 )
+# Per query slot (node, then element; "Q"), but sized 0 where unused so that a snapshot does
+# not copy them: mesh query caches ("QM": slots with a mesh collider, else 0) and friction
+# anchors ("QA": slots with any collider, else 0).
 COLS_STATE = (
-    ("qc_meta", "i", ("Q", 5), None, 0),
-    ("qc_geo", "f", ("Q", 8), None, 0),
-    ("qc_tris", "i", ("Q", 32), None, 0),
-    ("qc_dist", "f", ("Q", 32), None, 0),
-    ("anchor", "f", ("Q", 4), None, 0),
-    ("anchor_id", "i", ("Q",), None, 0),
+    ("qc_meta", "i", ("QM", 5), None, 0),
+    ("qc_geo", "f", ("QM", 8), None, 0),
+    ("qc_tris", "i", ("QM", 32), None, 0),
+    ("qc_dist", "f", ("QM", 32), None, 0),
+    ("anchor", "f", ("QA", 4), None, 0),
+    ("anchor_id", "i", ("QA",), None, 0),
 )
 COLS = (
     ("kind", "i", ("C",), None, 0),
