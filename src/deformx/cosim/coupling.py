@@ -410,8 +410,10 @@ class CoSimulation:
             out[k, M_AL:M_AL + 3], out[k, M_COM:M_COM + 3] = x.angular_acceleration, x.com
         return out
 
-    def step(self) -> None:
-        """One macro step of Algorithm 1 (see the module docstring)."""
+    def step(self, on_diverged: str = "raise") -> np.ndarray | None:
+        """One macro step of Algorithm 1 (see the module docstring). ``on_diverged`` as for
+        :meth:`World.step`: ``"report"`` returns the rods that diverged (their loads on the
+        bodies zeroed for this step; restore them before the next)."""
         be = self.backend
         clock = perf_counter if self.profile else None
         if clock:
@@ -425,7 +427,7 @@ class CoSimulation:
         self._drive(motions)
         if clock:
             t2 = clock()
-        self.world.step(self.substeps)
+        diverged = self.world.step(self.substeps, on_diverged=on_diverged)
         if clock:
             t3 = clock()
         self._feed_back(motions)
@@ -440,6 +442,7 @@ class CoSimulation:
             tm["coupling"] += (t2 - t1) + (t4 - t3)
             tm["rods"] += t3 - t2
             tm["steps"] += 1
+        return diverged
 
     def reset_timings(self) -> None:
         """Zero :attr:`timings` (seconds spent per phase, summed over steps while

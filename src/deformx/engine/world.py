@@ -405,12 +405,23 @@ class World:
         self._time = float(value)
         self._sim[SIM_T] = self._time  # where the kernels read it (and leave the new time)
 
-    def step(self, n_steps: int = 1) -> None:
-        """Advance ``n_steps`` time steps (one kernel call for all rods and steps)."""
+    def step(self, n_steps: int = 1, on_diverged: str = "raise") -> np.ndarray | None:
+        """Advance ``n_steps`` time steps (one kernel call for all rods and steps).
+
+        A rod that diverges raises :class:`SimulationDiverged` (``on_diverged="raise"``). In a
+        world whose rods never touch each other (see :attr:`rods_coupled`), ``"report"``
+        finishes the step for every other rod instead and returns the indices of the rods
+        that diverged (an empty array when none did): they are left where they failed, their
+        loads on their drivers (reactions, impulses) zeroed, to be restored with
+        ``rod.set_state`` before the next step (a batch of environments resets that one).
+        Worlds whose rods touch raise either way.
+        """
+        if on_diverged != "raise":
+            return self._step_reporting(n_steps, on_diverged)
         if type(n_steps) is not int or n_steps < 1:
             n_steps = check.integer_at_least("n_steps", n_steps, 0)
             if n_steps == 0:
-                return
+                return None
         if self._stale_env or self._stale_rods:
             if not self._rods:
                 advance_drivers(self._drivers.rows, n_steps, self._dt)
@@ -422,7 +433,7 @@ class World:
                                               self._pairs)
             if flag == -1:
                 self._time = t  # the kernel left it in self._sim too
-                return
+                return None
         else:
             t, flag = self._advance_threaded(n_steps)
         if flag >= 0:
@@ -430,6 +441,36 @@ class World:
         self.time = t
         if flag == -2:
             self._warn_deep()
+        return None
+
+    @property
+    def rods_coupled(self) -> bool:
+        """Whether rods may touch each other (rod contact on and more than one segment):
+        such rods advance together, and a divergence stops them all."""
+        return self.rod_contact and sum(r.n_elements for r in self._rods) > 1
+
+    def _step_reporting(self, n_steps: int, on_diverged: str) -> np.ndarray:
+        if on_diverged != "report":
+            raise ValueError(f"on_diverged must be 'raise' or 'report', got {on_diverged!r}")
+        try:
+            self.step(n_steps)
+            return _NO_RODS
+        except SimulationDiverged:
+            status = self._rods_p["status"]
+            failed = np.flatnonzero(status[:, 0] != verlet.OK)
+            firsts = {g[0] for g in self._groups}
+            if self.rods_coupled or (self._colliders and firsts.intersection(failed.tolist())):
+                # Rods stepped together, or the colliders' motion came from a failed rod's copy.
+                raise
+        ok = np.flatnonzero(status[:, 0] == verlet.OK)
+        if ok.size == 0:
+            self._raise_diverged(int(failed[0]))
+        self.time = float(self._rods_p["times"][ok[0]])
+        env = self._env
+        env["dreact"][failed] = 0.0
+        env["dimp"][failed] = 0.0
+        self._warn_deep()
+        return failed
 
     def _first_call(self, n_steps: int, *args: Any) -> tuple:
         """The kernel through numba's dispatcher (compiling or loading it), then its compiled
@@ -477,9 +518,10 @@ class World:
         self.time = float(self.time + (steps + 0.5) * self._dt)
         # The explicit limit means nothing to the stable integrator, which has already tried
         # dt/64 sub-steps: suggest a smaller step of the same kind.
-        suggested = min(rod.stable_dt() for rod in self._rods)
-        if self.integrator == "stable" or suggested >= self._dt:
-            suggested = 0.25 * self._dt
+        suggested = 0.25 * self._dt
+        if self.integrator == "verlet":
+            limit = min(rod.stable_dt() for rod in self._rods)
+            suggested = limit if limit < self._dt else suggested
         raise SimulationDiverged(rod=r, element=k, time=self.time, suggested_dt=suggested,
                                  reason=_REASONS.get(code, "unknown"), dt=self._dt)
 
@@ -611,6 +653,10 @@ class World:
         return (f"World(rods={len(self._rods)}, planes={len(self._planes)}, "
                 f"colliders={len(self._colliders)}, dt={self._dt:g} s, "
                 f"t={self.time:g} s, integrator={self.integrator!r})")
+
+
+_NO_RODS = np.zeros(0, dtype=np.int64)
+_NO_RODS.flags.writeable = False
 
 
 def _contact_keywords(contact: dict) -> dict:

@@ -6,8 +6,9 @@ environment a batch of ``num_envs``.
 
 Per-environment resets restore that copy's settled state: its arm's joints (and capsule
 chain) in MuJoCo and its rope through the engine's per-rod state. A rope that diverges during
-a step (a fold of more than 170 deg, see ``docs/learning.md``) rolls the whole step back and
-cuts that copy's episode short - truncated, not terminated: the simulator could not go on, the
+a step (a fold of more than 170 deg, see ``docs/learning.md``) is reset while the others
+finish the step (``World.step(on_diverged="report")``; where ropes may touch each other, the
+whole step is rolled back and run again without it), and that copy's episode is cut short - truncated, not terminated: the simulator could not go on, the
 task did not end, so a learner bootstraps there - keeping its last valid observation in
 :attr:`HitTargetBatch.diverged_obs`; the copy is reset and the others step on.
 """
@@ -123,6 +124,7 @@ class HitTargetBatch:
         shapes = [initial_rope(tops[i], cfg.rope_length, cfg.n_elements, cfg.radius)
                   for i in range(self.n)]
         self.diverged_obs: dict[int, np.ndarray] = {}  # copy -> its last valid observation
+        self._obs: np.ndarray | None = None  # observations() since the last change of state
         self.sim, self.rods = None, []
         self._tip_index = None  # where the ropes' tips lie in the world's buffers
         self._tip_owner = None
@@ -197,6 +199,7 @@ class HitTargetBatch:
         import mujoco
 
         self._load(i, self._settled[i])
+        self._obs = None
         mujoco.mj_kinematics(self.backend.model, self.backend.data)  # its stick and chain
         self.q_cmd[i] = self._q0
         self.a_prev[i] = 0.0
@@ -224,6 +227,14 @@ class HitTargetBatch:
         diverged = np.zeros(self.n, dtype=bool)
         if self.sim is None:
             self._advance()
+        elif not self.sim.world.rods_coupled:
+            # Ropes that never touch: the others finish the step, a diverged one is reset.
+            last = self.observations() if self._obs is None else self._obs
+            failed = self.sim.step(on_diverged="report")
+            for i in failed:
+                diverged[i] = True
+                self.diverged_obs[int(i)] = last[i].copy()
+                self._load(int(i), self._settled[int(i)])
         else:
             before = self._full_state()
             while True:
@@ -241,6 +252,7 @@ class HitTargetBatch:
                     self._load(err.rod, self._settled[err.rod])
                     before = self._full_state()
         self.steps += 1
+        self._obs = None
         import mujoco
 
         mujoco.mj_kinematics(self.backend.model, self.backend.data)  # the sticks now, not
@@ -333,10 +345,11 @@ class HitTargetBatch:
         d = self.backend.data
         act = self._active
         tips, tip_v = self.tips()
-        return np.concatenate([d.qpos[self._qadr[:, act]], d.qvel[self._vadr[:, act]], tips,
-                               tip_v, d.xpos[self._tool] - self.origins,
-                               np.broadcast_to(self._target, (self.n, 3))],
-                              axis=1).astype(np.float32)
+        self._obs = np.concatenate([d.qpos[self._qadr[:, act]], d.qvel[self._vadr[:, act]],
+                                    tips, tip_v, d.xpos[self._tool] - self.origins,
+                                    np.broadcast_to(self._target, (self.n, 3))],
+                                   axis=1).astype(np.float32)
+        return self._obs.copy()  # kept: the last valid observation of a copy that diverges
 
     def info(self, i: int, success: bool = False, diverged: bool = False) -> dict:
         return {"d": float(self.d[i]), "d_min": float(self.d_min[i]),
