@@ -75,6 +75,7 @@ class DriverTable:
         self.rows = np.zeros((0, D_COLS))
         self.impulse_base = np.zeros((0, 6))
         self.env = None
+        self._owner = np.zeros(0, dtype=np.int64)
         self._free: list[int] = []
 
     def add(self, handle: "Driver") -> None:
@@ -115,12 +116,12 @@ class DriverTable:
     def impulses(self, index: np.ndarray) -> np.ndarray:
         """:meth:`impulse` of many drivers at once (n, 6); ``index`` from :meth:`index`."""
         out = np.empty((index.shape[0], 6))
-        gather_impulses(self.impulse_base, self._dimp(), index, out)
+        gather_impulses(self.impulse_base, self._dimp(), self._owner, index, out)
         return out
 
     def reset_impulses(self, index: np.ndarray) -> None:
         """:meth:`reset_impulse` of many drivers at once."""
-        clear_impulses(self.impulse_base, self._dimp(), index)
+        clear_impulses(self.impulse_base, self._dimp(), self._owner, index)
 
     def _dimp(self) -> np.ndarray:
         return _NO_IMPULSES if self.env is None else self.env["dimp"]
@@ -131,6 +132,12 @@ class DriverTable:
             dimp = self.env["dimp"]
             self.impulse_base[: dimp.shape[1]] += dimp.sum(axis=0)
         self.env = env
+        # The rod whose clamp a driver is (the only one that loads it), -1 for the others.
+        self._owner = np.full(env["dimp"].shape[1], -1, dtype=np.int64)
+        for rows, drv in (("rod_pcon", "pcon_drv"), ("rod_fcon", "fcon_drv")):
+            ptr = env[rows]
+            self._owner[env[drv][ptr[0]:ptr[-1]]] = np.repeat(np.arange(ptr.size - 1),
+                                                              np.diff(ptr))
 
     def index(self, handles: Sequence["Driver"]) -> np.ndarray:
         """The rows of ``handles`` (each must belong to this table)."""
