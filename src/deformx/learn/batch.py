@@ -8,9 +8,9 @@ Per-environment resets restore that copy's settled state: its arm's joints (and 
 chain) in MuJoCo and its rope through the engine's per-rod state. A rope that diverges during
 a step (a fold of more than 170 deg, see ``docs/learning.md``) is reset while the others
 finish the step (``World.step(on_diverged="report")``; where ropes may touch each other, the
-whole step is rolled back and run again without it), and that copy's episode is cut short - truncated, not terminated: the simulator could not go on, the
-task did not end, so a learner bootstraps there - keeping its last valid observation in
-:attr:`HitTargetBatch.diverged_obs`; the copy is reset and the others step on.
+whole step is rolled back and run again without it), and that copy's episode is cut short -
+truncated, not terminated: the simulator could not go on, the task did not end, so a learner
+bootstraps there - keeping its last valid observation in :attr:`HitTargetBatch.diverged_obs`.
 """
 
 from __future__ import annotations
