@@ -361,11 +361,9 @@ class World:
         self._sim[SIM_DT] = self._dt
         self._sim[SIM_RR:SIM_RR + 3] = self._rod_contact_params
         self._sim[SIM_SKIN] = 2.0 * float(rp["seg_radius"].max()) if rp["Q"].shape[0] else 0.0
-        coupled = self.rod_contact and rp["segs"].shape[0] > 1
-        self._groups = ([(0, len(self._rods))] if coupled
+        self._groups = ([(0, len(self._rods))] if self.rods_coupled
                         else balanced_groups(rp["ne"], self.threads))
         self._opts = assemble.run_options(self._groups, self.iterations)
-        self._coupled = coupled
         self._bind_kernel()
         self._stale_env = False
 
@@ -374,7 +372,7 @@ class World:
         rp, cp = self._rods_p, self._cols_p
         self._bufs = (rp.F, rp.I, self._env.F, self._env.I, None if cp is None else cp.F,
                       None if cp is None else cp.I)
-        self._kernel = step.KERNELS[self.integrator, self._coupled]
+        self._kernel = step.KERNELS[self.integrator, self.rods_coupled]
         self._call = self._first_call
         self._args = (self._sim, self._opts[0], *self._bufs) if len(self._groups) == 1 else None
 
@@ -447,7 +445,7 @@ class World:
     def rods_coupled(self) -> bool:
         """Whether rods may touch each other (rod contact on and more than one segment):
         such rods advance together, and a divergence stops them all."""
-        return self.rod_contact and sum(r.n_elements for r in self._rods) > 1
+        return self.rod_contact and self._rods_p is not None and self._rods_p["segs"].shape[0] > 1
 
     def _step_reporting(self, n_steps: int, on_diverged: str) -> np.ndarray:
         if on_diverged != "report":
