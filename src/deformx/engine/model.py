@@ -59,21 +59,10 @@ def pack_rods(rods: Sequence, dt: float, stable: bool = True) -> Packed:
         n = slice(n0, n0 + nn[i])
         e = slice(e0, e0 + ne[i])
         v = slice(v0, v0 + nv[i])
-        b["mass"][n] = rod.masses
+        write_material(b, rod, i)
         b["node_radius"][n] = rod.node_radius
-        # Floor of the automatic contact stiffness (N/m): a fraction of the adjacent elements'
-        # axial stiffness, so a stiff rod pressing on a plane does not sink into it.
-        axial = rod._shear_matrix[:, 2] / rod.rest_lengths
-        kmin = np.zeros(nn[i])
-        kmin[: rod.n_elements] = axial
-        kmin[1:] = np.maximum(kmin[1:], axial[: nn[i] - 1])
-        b["node_kmin"][n] = CONTACT_STIFFNESS_FLOOR * kmin
-        b["J"][e] = rod._inertia
-        b["inv_J"][e] = 1.0 / rod._inertia
-        b["S"][e] = rod._shear_matrix
         b["rest_len"][e] = rod.rest_lengths
         b["rest_sigma"][e] = rod.rest_sigma
-        b["B"][v] = rod._bend_matrix
         b["rest_vor"][v] = rod.rest_voronoi_lengths
         b["rest_kappa"][v] = rod.rest_kappa
         _segments(b, rod, i, n0, e0)
@@ -86,6 +75,25 @@ def pack_rods(rods: Sequence, dt: float, stable: bool = True) -> Packed:
     b["segs"][:] = segs
     b["nodes"][:] = nodes
     return b
+
+
+def write_material(b: Packed, rod, i: int) -> None:
+    """Rod ``i``'s masses, inertia and stiffness into ``b`` (at packing, and when
+    :meth:`Rod.set_material` changes them in place)."""
+    n0, e0, v0 = int(b["node0"][i]), int(b["elem0"][i]), int(b["vor0"][i])
+    nn, ne = rod.masses.shape[0], rod.rest_lengths.shape[0]
+    b["mass"][n0:n0 + nn] = rod.masses
+    # Floor of the automatic contact stiffness (N/m): a fraction of the adjacent elements'
+    # axial stiffness, so a stiff rod pressing on a plane does not sink into it.
+    axial = rod._shear_matrix[:, 2] / rod.rest_lengths
+    kmin = np.zeros(nn)
+    kmin[:ne] = axial
+    kmin[1:] = np.maximum(kmin[1:], axial[: nn - 1])
+    b["node_kmin"][n0:n0 + nn] = CONTACT_STIFFNESS_FLOOR * kmin
+    b["J"][e0:e0 + ne] = rod._inertia
+    b["inv_J"][e0:e0 + ne] = 1.0 / rod._inertia
+    b["S"][e0:e0 + ne] = rod._shear_matrix
+    b["B"][v0:v0 + rod._bend_matrix.shape[0]] = rod._bend_matrix
 
 
 def _rod_views(n: slice, e: slice) -> tuple:

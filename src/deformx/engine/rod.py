@@ -110,28 +110,10 @@ class Rod:
             raise ValueError("points: consecutive points must be distinct (zero-length element)")
         nv = ne if self.closed else ne - 1
 
-        area = np.pi * self.radius ** 2
-        inertia = area * area / (4.0 * np.pi)  # second moment of area, pi r^4 / 4
         self.rest_lengths = rest_len
-        self.element_masses = self.density * area * rest_len
-        masses = np.zeros(nn)
-        if self.closed:
-            masses += 0.5 * self.element_masses
-            masses += 0.5 * np.roll(self.element_masses, 1)
-        else:
-            masses[:-1] += 0.5 * self.density * area * rest_len
-            masses[1:] += 0.5 * self.density * area * rest_len
-        self.masses = masses
         self.point_masses: dict[int, float] = {}  # node -> extra lumped mass (kg)
-        self._inertia = np.outer(self.density * rest_len, [inertia, inertia, 2.0 * inertia])
-        self._shear_matrix = np.tile(
-            [ALPHA_SHEAR * self.shear_modulus * area, ALPHA_SHEAR * self.shear_modulus * area,
-             self.stretch_modulus * area], (ne, 1))
-        bend_elem = np.tile([self.youngs_modulus * inertia, self.youngs_modulus * inertia,
-                             self.shear_modulus * 2.0 * inertia], (ne, 1))
+        self._derive_material()
         la, lb = rest_len[:nv], np.roll(rest_len, -1)[:nv]
-        ba, bb = bend_elem[:nv], np.roll(bend_elem, -1, axis=0)[:nv]
-        self._bend_matrix = (bb * lb[:, None] + ba * la[:, None]) / (lb + la)[:, None]
         self.rest_voronoi_lengths = 0.5 * (lb + la)
         self.rest_sigma = np.zeros((ne, 3))
         if rest_kappa is None:
@@ -294,6 +276,64 @@ class Rod:
         if self._world is None:
             raise ValueError("unignore: add the rod to a world first")
         self._world._ignore(self, colliders, ignore=False)
+
+    # ------------------------------------------------------------------ material
+    def _derive_material(self) -> None:
+        """Masses, rotational inertia, shear/stretch and bend/twist stiffness from the
+        material and the rest lengths (PyElastica's definitions)."""
+        rest_len = self.rest_lengths
+        ne = rest_len.shape[0]
+        nn = ne if self.closed else ne + 1
+        area = np.pi * self.radius ** 2
+        inertia = area * area / (4.0 * np.pi)  # second moment of area, pi r^4 / 4
+        self.element_masses = self.density * area * rest_len
+        masses = np.zeros(nn)
+        masses[:ne] += 0.5 * self.element_masses
+        if self.closed:
+            masses += 0.5 * np.roll(self.element_masses, 1)
+        else:
+            masses[1:] += 0.5 * self.element_masses
+        for node, extra in self.point_masses.items():
+            masses[node] += extra
+        self.masses = masses
+        self._inertia = np.outer(self.density * rest_len, [inertia, inertia, 2.0 * inertia])
+        self._shear_matrix = np.tile(
+            [ALPHA_SHEAR * self.shear_modulus * area, ALPHA_SHEAR * self.shear_modulus * area,
+             self.stretch_modulus * area], (ne, 1))
+        bend_elem = np.tile([self.youngs_modulus * inertia, self.youngs_modulus * inertia,
+                             self.shear_modulus * 2.0 * inertia], (ne, 1))
+        nv = ne if self.closed else ne - 1
+        la, lb = rest_len[:nv], np.roll(rest_len, -1)[:nv]
+        ba, bb = bend_elem[:nv], np.roll(bend_elem, -1, axis=0)[:nv]
+        self._bend_matrix = (bb * lb[:, None] + ba * la[:, None]) / (lb + la)[:, None]
+
+    def set_material(self, *, density: float | None = None, youngs_modulus: float | None = None,
+                     shear_modulus: float | None = None, poisson_ratio: float | None = None,
+                     stretch_modulus: float | None = None) -> None:
+        """Change the rod's material in place (domain randomisation at an episode's reset):
+        masses, inertia and stiffness are rewritten in the world's buffers, no rebuild; it
+        takes effect at the next step. The shape and the state stay as they are.
+
+        Parameters left out keep their value, except that a new ``youngs_modulus`` carries the
+        shear and stretch moduli along in proportion unless they are given (``shear_modulus``
+        or ``poisson_ratio``; ``stretch_modulus``). Units: kg/m^3 and Pa.
+        """
+        rho = self.density if density is None else check.positive("density", density, "kg/m^3")
+        E = self.youngs_modulus if youngs_modulus is None else check.positive(
+            "youngs_modulus", youngs_modulus, "Pa")
+        scale = E / self.youngs_modulus
+        if shear_modulus is None and poisson_ratio is None:
+            G = self.shear_modulus * scale
+        else:
+            G = shear_modulus_from(E, shear_modulus, poisson_ratio)
+        if stretch_modulus is not None:
+            Es = check.positive("stretch_modulus", stretch_modulus, "Pa")
+        else:  # the default stretch modulus is E itself: keep it so, bit for bit
+            Es = E if self.stretch_modulus == self.youngs_modulus else self.stretch_modulus * scale
+        self.density, self.youngs_modulus, self.shear_modulus, self.stretch_modulus = rho, E, G, Es
+        self._derive_material()
+        if self._world is not None:
+            self._world._rod_material_changed(self)
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> dict:

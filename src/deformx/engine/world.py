@@ -19,9 +19,10 @@ from .contact.segments import P_AUTO, P_C, P_K, P_MUK, P_MUS
 from .contact.speculative import V_OUT
 from .drivers import Driver, DriverTable
 from .kernels import implicit, step, verlet
-from .kernels.bundles import SIM_DT, SIM_G, SIM_LEN, SIM_MAX_STRAIN, SIM_RR, SIM_SKIN, SIM_T, SIM_TOL
+from .kernels.bundles import (OPT_FLAG, SIM_DT, SIM_G, SIM_LEN, SIM_MAX_STRAIN, SIM_RR, SIM_SKIN,
+                              SIM_T, SIM_TOL)
 from .kernels.step import advance_drivers, compiled_entry
-from .model import bind_rod, pack_rods, set_damping
+from .model import bind_rod, pack_rods, set_damping, write_material
 from .packing import Packed
 from .rod import Rod
 from .state import WorldState, put_rod, rod_slices, take_rod
@@ -336,6 +337,11 @@ class World:
             self._rods_p["group"][:] = [r.contact_group for r in self._rods]
             self._check_damping()
 
+    def _rod_material_changed(self, rod: Rod) -> None:
+        """A rod's masses, inertia or stiffness changed: rewrite its slices in place."""
+        if self._rods_p is not None and not self._stale_rods:
+            write_material(self._rods_p, rod, rod._index)
+
     def _check_damping(self) -> None:
         if self.integrator == "verlet":
             viscous = [i for i, r in enumerate(self._rods) if r.internal_damping > 0.0]
@@ -396,12 +402,11 @@ class World:
     @property
     def time(self) -> float:
         """Simulated time (s)."""
-        return self._time
+        return float(self._sim[SIM_T])  # where the kernels read it and leave the new time
 
     @time.setter
     def time(self, value: float) -> None:
-        self._time = float(value)
-        self._sim[SIM_T] = self._time  # where the kernels read it (and leave the new time)
+        self._sim[SIM_T] = float(value)
 
     def step(self, n_steps: int = 1, on_diverged: str = "raise") -> np.ndarray | None:
         """Advance ``n_steps`` time steps (one kernel call for all rods and steps).
@@ -427,16 +432,15 @@ class World:
                 return
             self._prepare()
         if self._args is not None:  # one group of rods: the kernel, called directly
-            t, flag, self._pairs = self._call(n_steps, *self._args, self._drivers.rows,
-                                              self._pairs)
-            if flag == -1:
-                self._time = t  # the kernel left it in self._sim too
+            out = self._call(n_steps, *self._args, self._drivers.rows, self._pairs)
+            if out is None:  # no divergence, no deep start, the pair list did not grow
                 return None
+            self._pairs = out
+            flag = int(self._opts[0][OPT_FLAG])
         else:
-            t, flag = self._advance_threaded(n_steps)
+            flag = self._advance_threaded(n_steps)
         if flag >= 0:
             self._raise_diverged(flag)
-        self.time = t
         if flag == -2:
             self._warn_deep()
         return None
@@ -489,25 +493,28 @@ class World:
                              deep[r], self.time, V_OUT)
         deep[:] = 0.0
 
-    def _advance_threaded(self, n_steps: int) -> tuple[float, int]:
-        """Groups of rods on threads (each with its own copy of the drivers); returns the new
-        time and the kernels' flag (see :mod:`.kernels.step`)."""
+    def _advance_threaded(self, n_steps: int) -> int:
+        """Groups of rods on threads (each with its own copy of the drivers); returns the
+        kernels' flag (see :mod:`.kernels.step`) and leaves the new time unless a rod failed."""
         work = n_steps * int(self._rods_p["ne"].sum())
+        args = (*self._bufs, self._drivers.rows, self._pairs)
         if work >= MIN_THREADED_WORK:
             futures = [pool(len(self._groups)).submit(self._kernel, n_steps, self._sim, opts,
-                                                      *self._bufs, self._drivers.rows,
-                                                      self._pairs)
+                                                      *args)
                        for opts in self._opts]
-            results = [f.result() for f in futures]
+            for f in futures:
+                f.result()
         else:
-            results = [self._kernel(n_steps, self._sim, opts, *self._bufs, self._drivers.rows,
-                                    self._pairs) for opts in self._opts]
+            for opts in self._opts:
+                self._kernel(n_steps, self._sim, opts, *args)
         step.collect_drivers(*self._bufs[2:], self._drivers.rows, len(self._rods))
         status = self._rods_p["status"]
-        failed = [res[1] for res in results if res[1] >= 0]
+        flags = [int(opts[OPT_FLAG]) for opts in self._opts]
+        failed = [f for f in flags if f >= 0]
         if failed:
-            return results[0][0], min(failed, key=lambda r: status[r, 2])
-        return results[0][0], -2 if any(res[1] == -2 for res in results) else -1
+            return min(failed, key=lambda r: status[r, 2])
+        self.time = float(self._rods_p["times"][self._groups[0][0]])
+        return -2 if -2 in flags else -1
 
     def _raise_diverged(self, r: int) -> None:
         status = self._rods_p["status"]

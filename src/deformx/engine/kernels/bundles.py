@@ -261,5 +261,5 @@ def _carve_cols_overload(F, I):
 # damping and friction (negative: automatic), Verlet-list skin (m), time at the call's start.
 SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_TOL, SIM_RR, SIM_SKIN, SIM_T, SIM_LEN = 0, 1, 4, 5, 6, 9, 10, 11
 # opts: Newton iterations, load the drivers into the rods' copies first, store them back
-# after, and the range of rods to advance.
-OPT_ITER, OPT_LOAD, OPT_STORE, OPT_R0, OPT_R1, OPT_LEN = 0, 1, 2, 3, 4, 5
+# after, the range of rods to advance, and the call's outcome (the entry kernels' flag).
+OPT_ITER, OPT_LOAD, OPT_STORE, OPT_R0, OPT_R1, OPT_FLAG, OPT_LEN = 0, 1, 2, 3, 4, 5, 6

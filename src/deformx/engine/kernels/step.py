@@ -2,9 +2,12 @@
 
 They take only the world's buffers (a numba call costs ~0.1 us per array argument), carve
 them into bundles (:mod:`.bundles`), advance the rods (together when they touch each other,
-else each on its own) and the drivers, and return the new time, the first rod that diverged
-(-1: none; -2: none, but a rod started deeper inside a collider than a step resolves) and
-the rod-rod pair list (grown when it filled up). The new time is also left in ``sim``.
+else each on its own) and the drivers. They leave the new time in ``sim[SIM_T]`` (one group
+of rods; groups on threads leave it in the rods' ``times``) and a flag in ``opts[OPT_FLAG]``:
+the first rod that diverged, -1 if none, -2 if none but a rod started deeper inside a
+collider than a step resolves. They return None when the flag is -1 and the rod-rod pair list
+did not grow, else the pair list (the one passed in, or a grown one to keep): the common
+call then boxes no return value (a returned tuple cost ~0.6 us of a one-rod ``step()``).
 """
 
 from __future__ import annotations
@@ -13,7 +16,7 @@ from numba import njit, typeof
 from numba.core.typing.typeof import Purpose
 
 from .bundles import (
-    OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, R_NE, R_TIMES, SIM_T, carve_cols,
+    OPT_FLAG, OPT_LOAD, OPT_R0, OPT_R1, OPT_STORE, R_NE, R_TIMES, SIM_T, carve_cols,
     carve_env, carve_rods,
 )
 from .coupled import advance_world_implicit, advance_world_verlet
@@ -25,12 +28,10 @@ from .verlet import OK, advance_rods
 @njit(cache=True, inline="always", error_model="numpy")
 def _finish(t, sim, opts, rd, env, cols, drv):
     """Drivers back from the rods' copies and the time into ``sim`` (one group: groups on
-    threads leave both to the caller); the rod that failed first, else -2 if a rod is found
-    deep inside a collider (``stats[r, 5]``, warned about in Python), else -1."""
+    threads leave both to the caller); ``opts[OPT_FLAG]``: the rod that failed first, else -2
+    if a rod is found deep inside a collider (``stats[r, 5]``, warned about in Python), else
+    -1. Returns whether the caller must look (flag not -1)."""
     r0, r1 = opts[OPT_R0], opts[OPT_R1]
-    if opts[OPT_STORE]:
-        store_drivers(drv, env, cols, r0, r1)
-        sim[SIM_T] = t
     bad = -1
     for r in range(r0, r1):
         if rd.status[r, 0] != OK and (bad < 0 or rd.status[r, 2] < rd.status[bad, 2]):
@@ -38,62 +39,74 @@ def _finish(t, sim, opts, rd, env, cols, drv):
     if bad < 0:
         for r in range(r0, r1):
             if rd.stats[r, 5] != 0.0:
-                return -2
-    return bad
+                bad = -2
+                break
+    if opts[OPT_STORE]:
+        store_drivers(drv, env, cols, r0, r1)
+        if bad < 0:  # a divergence leaves the call's start time (the error reports from it)
+            sim[SIM_T] = t
+    opts[OPT_FLAG] = bad
+    return bad != -1
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` explicit steps of rods that do not touch each other (each on its own, all
-    its steps at once); returns (time, flag, pairs), flag as in the module's docstring."""
+    its steps at once); see the module's docstring."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
     advance_rods(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, rd, env, cols, drv,
                  opts[OPT_LOAD] != 0)
-    t = rd.r1[R_TIMES][opts[OPT_R0]]
-    return t, _finish(t, sim, opts, rd, env, cols, drv), pairs
+    if _finish(rd.r1[R_TIMES][opts[OPT_R0]], sim, opts, rd, env, cols, drv):
+        return pairs
+    return None
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_verlet_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` explicit steps of rods that touch each other (all rods, one step at a
-    time); returns (time, flag, pairs), flag as in the module's docstring."""
+    time); see the module's docstring."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
     for r in range(rd.ri[R_NE].shape[0]):
         load_drivers(env.dloc[r], drv, r, env, cols)
-    pairs = advance_world_verlet(n_steps, sim[SIM_T], sim, rd, env, cols, pairs)
-    t = rd.r1[R_TIMES][0]
-    return t, _finish(t, sim, opts, rd, env, cols, drv), pairs
+    grown = advance_world_verlet(n_steps, sim[SIM_T], sim, rd, env, cols, pairs)
+    look = _finish(rd.r1[R_TIMES][0], sim, opts, rd, env, cols, drv)
+    if look or grown.shape[0] != pairs.shape[0]:
+        return grown
+    return None
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` stable (backward-Euler) steps of rods that do not touch each other;
-    returns (time, flag, pairs), flag as in the module's docstring."""
+    see the module's docstring."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
     advance_rods_implicit(opts[OPT_R0], opts[OPT_R1], n_steps, sim[SIM_T], sim, opts, rd, env,
                           cols, drv, opts[OPT_LOAD] != 0)
-    t = rd.r1[R_TIMES][opts[OPT_R0]]
-    return t, _finish(t, sim, opts, rd, env, cols, drv), pairs
+    if _finish(rd.r1[R_TIMES][opts[OPT_R0]], sim, opts, rd, env, cols, drv):
+        return pairs
+    return None
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def step_stable_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
-    """``n_steps`` stable steps of rods that touch each other; returns (time, flag, pairs),
-    flag as in the module's docstring."""
+    """``n_steps`` stable steps of rods that touch each other; see the module's
+    docstring."""
     rd = carve_rods(RF, RI)
     env = carve_env(EF, EI)
     cols = carve_cols(CF, CI)
     for r in range(rd.ri[R_NE].shape[0]):
         load_drivers(env.dloc[r], drv, r, env, cols)
-    pairs = advance_world_implicit(n_steps, sim[SIM_T], sim, opts, rd, env, cols, pairs)
-    t = rd.r1[R_TIMES][0]
-    return t, _finish(t, sim, opts, rd, env, cols, drv), pairs
+    grown = advance_world_implicit(n_steps, sim[SIM_T], sim, opts, rd, env, cols, pairs)
+    look = _finish(rd.r1[R_TIMES][0], sim, opts, rd, env, cols, drv)
+    if look or grown.shape[0] != pairs.shape[0]:
+        return grown
+    return None
 
 
 # (integrator, rods touch each other) -> entry kernel. A world compiles only the one it uses:
