@@ -102,8 +102,9 @@ rope = case(drive=lambda: drive(w, clamp, {n_rope}), per_call=lambda: loop(w, {n
             batched=lambda: batch(w, {n_rope}))
 _report(explicit=explicit, stable=stable, rope=rope)
 """
-# Steps per timing: each timing takes some 10-50 ms on a laptop core.
-STEPS = {"explicit": 2000, "stable": 200, "rope": 500}
+# Steps per timing: each timing takes some 20-70 ms on a laptop core; the stable cases take
+# more steps, as their step times vary by more than the overhead measured.
+STEPS = {"explicit": 2000, "stable": 1000, "rope": 1000}
 # Rows of the table: (key, label, case, timing, target overhead in us per call or iteration).
 ROWS = (
     ("a", "a. 1x100 explicit: step()", "explicit", "per_call", 5.0),
@@ -115,8 +116,8 @@ ROWS = (
 
 def main() -> None:
     parser = tree_parser(__doc__)
-    parser.add_argument("--repeats", type=int, default=9,
-                        help="timings per case within a run, median taken (default: 9)")
+    parser.add_argument("--repeats", type=int, default=21,
+                        help="timings per case within a run, median taken (default: 21)")
     parser.add_argument("--quick", action="store_true", help="1 round of 5 repeats")
     args = parser.parse_args()
     rounds, repeats = (1, 5) if args.quick else (args.rounds, args.repeats)

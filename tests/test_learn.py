@@ -186,6 +186,86 @@ def test_vector_env_members_are_independent_and_match_the_single_env():
     b.close()
 
 
+def _drawn(cfg):
+    return {"youngs_modulus": 1.3 * cfg.youngs_modulus, "density": 0.75 * cfg.density,
+            "damping": 0.5 * cfg.damping}
+
+
+def test_a_rope_redrawn_in_place_swings_like_one_built_with_its_parameters():
+    """Randomisation at every reset changes a copy's rope in place (no rebuild, no
+    re-settling): under the same swing it follows a batch built with the drawn parameters
+    and settled, to well under the task's 5 cm success radius; the other copy keeps its
+    rope."""
+    from dataclasses import replace
+
+    from deformx.learn.batch import HitTargetBatch
+
+    cfg = HitTargetConfig(**dict(SHORT, settle_time=1.0))  # the task's settle
+    drawn = _drawn(cfg)
+    changed = HitTargetBatch(cfg, 2)
+    changed.set_rope(0, drawn)
+    changed.reset(0)
+    built = HitTargetBatch(replace(cfg, **drawn), 1)
+    assert changed.params[0] == dict(changed.params[1], **drawn)
+    assert changed.rods[0].mass == pytest.approx(built.rods[0].mass, rel=1e-12)
+    assert changed.rods[1].mass == pytest.approx(built.rods[0].mass / 0.75, rel=1e-12)
+    worst = 0.0
+    for k in range(200):  # a smooth swing (random actions fold the rope now and then)
+        act = 0.5 + 0.5 * np.sin(0.1 * k + np.array([[0.0, 2.0, 4.0]]))
+        changed.step(np.vstack([act, act]))
+        built.step(act)
+        worst = max(worst, float(np.linalg.norm(changed.tips()[0][0] - built.tips()[0][0])))
+    assert worst < 2e-3, worst
+
+
+def test_a_capsule_chain_redrawn_in_place_is_the_chain_built_with_its_parameters():
+    """The capsule baseline's rope lies partly on the floor after settling, where friction
+    makes trajectories depend on history: compare the model itself. Masses, inertias, joint
+    stiffness and MuJoCo's derived constants equal those compiled from the drawn parameters
+    (to the 1e-6 of MJCF's printed numbers)."""
+    from dataclasses import replace
+
+    from deformx.learn.batch import HitTargetBatch
+
+    cfg = HitTargetConfig(rope="capsule", **SHORT)
+    changed = HitTargetBatch(cfg, 2)
+    changed.set_rope(0, _drawn(cfg))
+    built = HitTargetBatch(replace(cfg, **_drawn(cfg)), 1)
+    (ba, ja), (bb, jb) = changed._capsule_parts(0), built._capsule_parts(0)
+    (b1, j1) = changed._capsule_parts(1)
+    ma, mb = changed.backend.model, built.backend.model
+    assert len(ba) == cfg.n_elements and len(ja) == len(jb) > 0
+    for field, idx_a, idx_b, idx_1 in (("body_mass", ba, bb, b1), ("body_inertia", ba, bb, b1),
+                                       ("body_subtreemass", ba, bb, b1),
+                                       ("body_invweight0", ba, bb, b1),
+                                       ("jnt_stiffness", ja, jb, j1)):
+        np.testing.assert_allclose(getattr(ma, field)[idx_a], getattr(mb, field)[idx_b],
+                                   rtol=1e-6, err_msg=field)
+        assert not np.allclose(getattr(ma, field)[idx_1], getattr(mb, field)[idx_b],
+                               rtol=1e-3), field  # the other copy kept its rope
+
+
+def test_the_vector_env_redraws_ropes_at_each_reset():
+    kw = dict(SHORT, randomise={"youngs_modulus": 0.3, "density": 0.3})
+    envs = gym.make_vec("deformx/HitTarget-v0", num_envs=2,
+                        vectorization_mode="vector_entry_point", **kw)
+    envs.reset(seed=1)
+    batch = envs.unwrapped.batch
+    first = [dict(p) for p in batch.params]
+    assert first[0] != first[1]
+    envs.reset(options={"reset_mask": np.array([True, False])})
+    assert batch.params[0] != first[0] and batch.params[1] == first[1]
+    for p, rod in zip(batch.params, batch.rods):
+        assert rod.density == p["density"] and rod.youngs_modulus == p["youngs_modulus"]
+        assert 0.7 * 700.0 <= p["density"] <= 1.3 * 700.0
+    again = gym.make_vec("deformx/HitTarget-v0", num_envs=2,
+                         vectorization_mode="vector_entry_point", **kw)
+    again.reset(seed=1)
+    assert again.unwrapped.batch.params == first  # seeded
+    envs.close()
+    again.close()
+
+
 def test_sb3_adapter_marks_time_limits_for_bootstrapping():
     pytest.importorskip("stable_baselines3")
     from deformx.learn.sb3 import SB3VecEnv
@@ -333,3 +413,20 @@ def test_a_diverged_rope_is_cut_short_and_the_others_step_on():
     np.testing.assert_array_equal(ia["final_obs"][0], before[0])
     np.testing.assert_array_equal(oa[1], ob[1])
     np.testing.assert_array_equal(ra[1], rb[1])
+
+
+def test_the_single_environment_cuts_a_diverged_episode_short():
+    """A batch of one: the rope that diverged is every rope of the world; the episode ends
+    truncated at its last valid observation, and the next reset starts cleanly."""
+    env = HitTargetEnv(**SHORT)
+    env.reset(seed=0)
+    before = env.batch.observations()[0]
+    env.batch.rods[0].velocities[5] = (1e5, 0.0, 0.0)  # blows up within the step
+    obs, _, terminated, truncated, info = env.step(np.full(3, 0.5, dtype=np.float32))
+    assert info["diverged"] and truncated and not terminated
+    np.testing.assert_array_equal(obs, before)
+    first, _ = env.reset(seed=0)
+    again = HitTargetEnv(**SHORT)
+    np.testing.assert_array_equal(first, again.reset(seed=0)[0])
+    env.close()
+    again.close()

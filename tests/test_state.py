@@ -178,6 +178,12 @@ def test_a_diverged_rod_is_reported_and_the_others_step_on(integrator, dt):
         w.step(10)
     for ra, rb in zip(rods_a, rods_b):
         np.testing.assert_array_equal(ra.positions, rb.positions)
+    # Every rod diverging (a batch of one) is reported too, the time moved on by the step.
+    for r in rods_a:
+        r.velocities[5] = (1e5, 0.0, 0.0)
+    t0 = a.time
+    assert a.step(10, on_diverged="report").tolist() == [0, 1, 2]
+    assert a.time == pytest.approx(t0 + 10 * dt, rel=1e-12)
     with pytest.raises(ValueError, match="on_diverged"):
         a.step(1, on_diverged="ignore")
 

@@ -454,6 +454,7 @@ class World:
     def _step_reporting(self, n_steps: int, on_diverged: str) -> np.ndarray:
         if on_diverged != "report":
             raise ValueError(f"on_diverged must be 'raise' or 'report', got {on_diverged!r}")
+        start = self.time
         try:
             self.step(n_steps)
             return _NO_RODS
@@ -465,9 +466,9 @@ class World:
                 # Rods stepped together, or the colliders' motion came from a failed rod's copy.
                 raise
         ok = np.flatnonzero(status[:, 0] == verlet.OK)
-        if ok.size == 0:
-            self._raise_diverged(int(failed[0]))
-        self.time = float(self._rods_p["times"][ok[0]])
+        # Every rod failed (a batch of one): the time the step would have reached.
+        self.time = (float(self._rods_p["times"][ok[0]]) if ok.size
+                     else start + n_steps * self._dt)
         env = self._env
         env["dreact"][failed] = 0.0
         env["dimp"][failed] = 0.0

@@ -147,6 +147,7 @@ class HitTargetBatch:
             for i, rod in enumerate(self.rods):
                 self.sim.attach(rod, "start", body=f"e{i}_tool_tip", frame=cfg.clamp_frame)
             self.ropes = [cosim.RodRope(rod) for rod in self.rods]
+        self._const_data = mujoco.MjData(m) if cfg.rope == "capsule" else None
         be.begin()
         for _ in range(int(round(cfg.settle_time / cfg.control_dt))):
             self._advance()
@@ -192,6 +193,43 @@ class HitTargetBatch:
         mujoco.mj_setState(self.backend.model, self.backend.data, buf,
                            mujoco.mjtState.mjSTATE_INTEGRATION)
         self.sim.world.set_state(world)
+
+    def set_rope(self, i: int, params: dict) -> None:
+        """Give copy ``i``'s rope new parameters (``youngs_modulus``, ``density``,
+        ``damping``; the others keep theirs) in place, without a rebuild: the Cosserat rope
+        through :meth:`~deformx.Rod.set_material`, the capsule chain through MuJoCo's model
+        (body masses and inertias and joint stiffness, scaled; its joint damping is the
+        config's ``capsule_damping``, not drawn). Takes effect from the
+        copy's next reset, which restarts it from the settled hanging shape: a rope hangs
+        straight whatever its material (its stretch modulus is not randomised)."""
+        old = self.params[i]
+        new = dict(old, **params)
+        self.params[i] = new
+        cfg = self.config
+        if self.rods:
+            rod = self.rods[i]
+            rod.set_material(density=new["density"], youngs_modulus=new["youngs_modulus"],
+                             shear_modulus=cfg.shear_modulus,
+                             stretch_modulus=cfg.stretch_modulus)
+            rod.damping = new["damping"]
+            return
+        import mujoco
+
+        m = self.backend.model
+        bodies, joints = self._capsule_parts(i)
+        mass = new["density"] / old["density"]
+        m.body_mass[bodies] *= mass
+        m.body_inertia[bodies] *= mass
+        m.jnt_stiffness[joints] *= new["youngs_modulus"] / old["youngs_modulus"]
+        # derived constants (subtree masses, constraint weights) of the new masses
+        mujoco.mj_setConst(m, self._const_data)
+
+    def _capsule_parts(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        m = self.backend.model
+        prefix = f"e{i}_rope"
+        bodies = np.array([b for b in self._body_i[i] if m.body(b).name.startswith(prefix)])
+        joints = np.array([j for j in range(m.njnt) if m.jnt_bodyid[j] in set(bodies.tolist())])
+        return bodies, joints
 
     # ------------------------------------------------------------------ episodes
     def reset(self, i: int) -> None:

@@ -98,10 +98,8 @@ class HitTargetEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        if self.config.randomise:  # a new rope: rebuild and settle it
-            self.batch = HitTargetBatch(self.config, 1,
-                                        params=[with_params(self.config, self.np_random)])
-            self.close()
+        if self.config.randomise:  # a new rope, changed in place
+            self.batch.set_rope(0, with_params(self.config, self.np_random))
         self.batch.reset(0)
         return self.batch.observations()[0], self.batch.info(0)
 

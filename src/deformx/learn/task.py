@@ -71,8 +71,8 @@ class HitTargetConfig:
     distance: str = "plane"                  # "plane" (y-z) or "3d"
     w_strike: float = 0.0
     strike_radius: float = 0.1
-    # randomisation of the rope (fractions, uniform +-): the single environment redraws at
-    # every reset (and settles the new rope), the vector environment once per member
+    # randomisation of the rope (fractions, uniform +-), redrawn at every reset of an
+    # episode and changed in place (HitTargetBatch.set_rope)
     randomise: dict = field(default_factory=dict)  # e.g. {"youngs_modulus": 0.3}
 
     def __post_init__(self) -> None:

@@ -27,8 +27,9 @@ class HitTargetVecEnv(VectorEnv):
     """``num_envs`` hit-target environments stepped together (see the module docstring).
 
     ``spacing`` (m): the copies stand this far apart along x (out of the swing plane);
-    observations are in each copy's own frame. With ``config.randomise`` each copy gets its
-    own rope parameters, drawn once from ``seed``."""
+    observations are in each copy's own frame. With ``config.randomise`` each copy draws new
+    rope parameters at every reset of its episode (``seed``, or the seed given to
+    :meth:`reset`), changed in place (:meth:`HitTargetBatch.set_rope`)."""
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
@@ -37,8 +38,9 @@ class HitTargetVecEnv(VectorEnv):
                  **overrides: Any) -> None:
         overrides.pop("render_mode", None)  # gymnasium passes it along; frames: single env
         self.config = cfg = make_config(config, target, rope, overrides)
-        rng = np.random.default_rng(seed)
-        params = [with_params(cfg, rng) for _ in range(num_envs)] if cfg.randomise else None
+        self._rng = np.random.default_rng(seed)  # rope parameters (config.randomise)
+        params = ([with_params(cfg, self._rng) for _ in range(num_envs)] if cfg.randomise
+                  else None)
         self.batch = HitTargetBatch(cfg, num_envs, spacing=spacing, params=params)
         self.num_envs = self.batch.n
         self.single_observation_space, self.single_action_space = task_spaces(cfg)
@@ -51,11 +53,12 @@ class HitTargetVecEnv(VectorEnv):
         if seed is not None:
             self._np_random_seed = seed if isinstance(seed, int) else seed[0]
             self._np_random = np.random.default_rng(self._np_random_seed)
+            self._rng = np.random.default_rng(self._np_random_seed)
         mask = np.ones(self.num_envs, dtype=bool)
         if options and "reset_mask" in options:
             mask = np.asarray(options["reset_mask"], dtype=bool)
         for i in np.flatnonzero(mask):
-            self.batch.reset(int(i))
+            self._reset_one(int(i))
         return self.batch.observations(), self._infos(np.zeros(self.num_envs, bool),
                                                       np.zeros(self.num_envs, bool))
 
@@ -72,13 +75,18 @@ class HitTargetVecEnv(VectorEnv):
                 final_obs[i] = b.diverged_obs.pop(int(i)) if diverged[i] else obs[i].copy()
                 final_info = self._add_info(final_info, b.info(int(i), success[i], diverged[i]),
                                             int(i))
-                b.reset(int(i))
+                self._reset_one(int(i))
             obs = b.observations()
             infos["final_obs"] = final_obs
             infos["_final_obs"] = terminated | truncated
             infos["final_info"] = final_info
             infos["_final_info"] = terminated | truncated
         return obs, rewards, terminated, truncated, infos
+
+    def _reset_one(self, i: int) -> None:
+        if self.config.randomise:
+            self.batch.set_rope(i, with_params(self.config, self._rng))
+        self.batch.reset(i)
 
     def _infos(self, success: np.ndarray, diverged: np.ndarray) -> dict:
         b = self.batch
