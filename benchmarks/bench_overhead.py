@@ -102,9 +102,9 @@ rope = case(drive=lambda: drive(w, clamp, {n_rope}), per_call=lambda: loop(w, {n
             batched=lambda: batch(w, {n_rope}))
 _report(explicit=explicit, stable=stable, rope=rope)
 """
-# Steps per timing: each timing takes some 20-70 ms on a laptop core; the stable cases take
-# more steps, as their step times vary by more than the overhead measured.
-STEPS = {"explicit": 2000, "stable": 1000, "rope": 1000}
+# Steps per timing: each timing takes some 10-70 ms on a laptop core; the stable cantilever
+# takes more steps, as its step times vary by more than the overhead measured.
+STEPS = {"explicit": 2000, "stable": 1000, "rope": 500}
 # Rows of the table: (key, label, case, timing, target overhead in us per call or iteration).
 ROWS = (
     ("a", "a. 1x100 explicit: step()", "explicit", "per_call", 5.0),
