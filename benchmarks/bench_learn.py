@@ -9,6 +9,12 @@ Rounds interleave every case; the table gives min-max over rounds.
 
     python benchmarks/bench_learn.py                      # N = 16, 64; 3 rounds
     python benchmarks/bench_learn.py --envs 64 256 --rounds 1
+    python benchmarks/bench_learn.py --tree ../copy --reference cecd6a9 --envs 64
+
+With ``--reference COMMIT`` the batches of a source tree (``--tree``, default this repository)
+and of that commit run side by side instead of PyElastica: each round builds and times them in
+a fresh interpreter per tree (``PYTHONPATH=<tree>/src``, one numba cache folder per tree kept
+over the rounds), trees alternating; the table gives each tree's rates and the ratio per round.
 """
 
 from __future__ import annotations
@@ -47,13 +53,81 @@ def batch_rate(venv, steps: int, rng: np.random.Generator) -> tuple[float, dict]
     return n / wall, tm
 
 
+# What one tree's round runs in its own interpreter (see _subproc.py): the same batches and
+# the same random actions as the in-process run.
+PROBE = """
+import numpy as np
+import deformx
+_check_tree(deformx)
+from deformx.learn.vector import HitTargetVecEnv
+{batch_rate}
+rng = np.random.default_rng({seed})
+rates = {{}}
+for n in {envs!r}:
+    for name, kw in {ropes!r}.items():
+        v = HitTargetVecEnv(n, settle_time=0.2, **kw)
+        v.reset(seed=0)
+        batch_rate(v, 3, rng)
+        rates[f"{{n}}|{{name}}"] = batch_rate(v, {steps}, rng)[0]
+        v.close()
+_report(**rates)
+"""
+
+
+def compare_trees(args) -> None:
+    """--reference: the tree's batches against the reference commit's, same run."""
+    import inspect
+    import tempfile
+    from pathlib import Path
+
+    from _subproc import check_tree, header, reference_tree, run_in_tree, span
+
+    console = Console(width=None if sys.stdout.isatty() else 150)
+    tree = check_tree(args.tree)
+    console.print(header(tree, args.reference))
+    runs: dict[str, list[dict]] = {"tree": [], "reference": []}
+    with reference_tree(args.reference) as ref, \
+            tempfile.TemporaryDirectory(prefix="deformx-numba-") as cache:
+        for k in range(args.rounds):
+            for who, path in (("tree", tree), ("reference", ref)):
+                folder = Path(cache) / who  # one cache per tree: only round 1 compiles
+                folder.mkdir(exist_ok=True)
+                code = PROBE.format(batch_rate=inspect.getsource(batch_rate), seed=k,
+                                    envs=args.envs, ropes=ROPES, steps=args.steps)
+                result, wall = run_in_tree(path, code, folder)
+                runs[who].append(result)
+                console.print(f"round {k + 1}/{args.rounds} {who:9s} ({wall:.0f} s)")
+    table = Table(title=f"HitTarget-v0 batches, env steps / s, random actions, {args.steps} "
+                        f"batch steps x {args.rounds} rounds (min-max), tree vs {args.reference}")
+    for col in ("envs", "rope", "tree", "reference", "ratio tree/ref per round"):
+        table.add_column(col, justify="right")
+    for key in runs["tree"][0]:
+        n, name = key.split("|", 1)
+        t = [r[key] for r in runs["tree"]]
+        f = [r[key] for r in runs["reference"]]
+        table.add_row(n, name, span(t, "{:,.0f}"), span(f, "{:,.0f}"),
+                      span([a / b for a, b in zip(t, f)], "{:.2f}x"))
+    console.print(table)
+
+
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--envs", type=int, nargs="+", default=[16, 64])
     parser.add_argument("--steps", type=int, default=100, help="batch steps per round")
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--tree", type=str, default=os.path.dirname(os.path.dirname(
+        os.path.abspath(__file__))), help="source tree to measure (with --reference)")
+    parser.add_argument("--reference", default=None,
+                        help="commit to compare with, side by side (instead of PyElastica)")
     args = parser.parse_args()
     sys.path.insert(0, os.path.dirname(__file__))
+    if args.reference:
+        from pathlib import Path
+
+        args.tree = Path(args.tree)
+        compare_trees(args)
+        return
     from bench_cosim import elastica_rope  # the same rope, PyElastica at 1e-5 s
 
     from deformx.learn.vector import HitTargetVecEnv
