@@ -231,8 +231,8 @@ def test_a_capsule_chain_redrawn_in_place_is_the_chain_built_with_its_parameters
     changed = HitTargetBatch(cfg, 2)
     changed.set_rope(0, _drawn(cfg))
     built = HitTargetBatch(replace(cfg, **_drawn(cfg)), 1)
-    (ba, ja), (bb, jb) = changed._capsule_parts(0), built._capsule_parts(0)
-    (b1, j1) = changed._capsule_parts(1)
+    (ba, ja), (bb, jb) = changed._capsules[0], built._capsules[0]
+    (b1, j1) = changed._capsules[1]
     ma, mb = changed.backend.model, built.backend.model
     assert len(ba) == cfg.n_elements and len(ja) == len(jb) > 0
     for field, idx_a, idx_b, idx_1 in (("body_mass", ba, bb, b1), ("body_inertia", ba, bb, b1),

@@ -465,9 +465,8 @@ class Rod:
             self.point_masses[node] = mass
         else:
             self.point_masses.pop(node, None)
-        w = self._world
-        if w is not None and w._rods_p is not None and not w._stale_rods:
-            w._rods_p["mass"][int(w._rods_p["node0"][self._index]) + node] = self.masses[node]
+        if self._world is not None:
+            self._world._rod_material_changed(self)
 
     @property
     def clamps(self) -> tuple[Clamp, ...]:

@@ -148,6 +148,9 @@ class HitTargetBatch:
                 self.sim.attach(rod, "start", body=f"e{i}_tool_tip", frame=cfg.clamp_frame)
             self.ropes = [cosim.RodRope(rod) for rod in self.rods]
         self._const_data = mujoco.MjData(m) if cfg.rope == "capsule" else None
+        # each capsule chain's bodies and joints (what set_rope scales)
+        self._capsules = ([self._find_capsule(i) for i in range(self.n)]
+                          if cfg.rope == "capsule" else [])
         be.begin()
         for _ in range(int(round(cfg.settle_time / cfg.control_dt))):
             self._advance()
@@ -216,7 +219,7 @@ class HitTargetBatch:
         import mujoco
 
         m = self.backend.model
-        bodies, joints = self._capsule_parts(i)
+        bodies, joints = self._capsules[i]
         mass = new["density"] / old["density"]
         m.body_mass[bodies] *= mass
         m.body_inertia[bodies] *= mass
@@ -224,12 +227,11 @@ class HitTargetBatch:
         # derived constants (subtree masses, constraint weights) of the new masses
         mujoco.mj_setConst(m, self._const_data)
 
-    def _capsule_parts(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+    def _find_capsule(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         m = self.backend.model
         prefix = f"e{i}_rope"
         bodies = np.array([b for b in self._body_i[i] if m.body(b).name.startswith(prefix)])
-        joints = np.array([j for j in range(m.njnt) if m.jnt_bodyid[j] in set(bodies.tolist())])
-        return bodies, joints
+        return bodies, np.flatnonzero(np.isin(m.jnt_bodyid, bodies))
 
     # ------------------------------------------------------------------ episodes
     def reset(self, i: int) -> None:
