@@ -15,7 +15,7 @@ from ..engine.kernels.bundles import D_A, D_AL, D_P, D_R, D_V, D_W
 M_P, M_R, M_V, M_W, M_A, M_AL, M_COM, M_COLS = 0, 3, 12, 15, 18, 21, 24, 27
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True)
 def body_motions(ids, rootid, xpos, xmat, subtree_com, cvel, cacc, xipos, gravity, out) -> None:
     """Frame motion of MuJoCo bodies ``ids`` into rows of ``out`` (M_* columns): what
     ``mj_objectVelocity`` / ``mj_objectAcceleration`` (mjOBJ_XBODY, world frame) give, from
@@ -44,7 +44,7 @@ def body_motions(ids, rootid, xpos, xmat, subtree_com, cvel, cacc, xipos, gravit
             out[k, M_R + j] = xmat[i, j]
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True)
 def drive_rows(rows, index, body, off, rot, motion, origin) -> None:
     """Driver ``index[k]`` (a row of the world's driver table) takes the motion of the frame
     at ``off[k]`` / ``rot[k]`` in body ``body[k]`` (a row of ``motion``, M_* columns):
@@ -78,7 +78,7 @@ def drive_rows(rows, index, body, off, rot, motion, origin) -> None:
             rows[d, D_AL + j] = motion[b, M_AL + j]
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True)
 def wrenches_from_impulses(imp, body, origin, com, inv_dt, out) -> None:
     """Sum driver impulses (force, torque about the driver's ``origin``) into each body's
     mean wrench over the step, torque moved to the body's ``com`` (``out`` (B, 6) zeroed)."""

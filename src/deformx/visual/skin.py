@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True)
 def _quat_from_directors(Q, out) -> None:
     """Quaternions (w, x, y, z) of world-from-material rotations R = Q[e]^T."""
     for e in range(Q.shape[0]):
@@ -47,7 +47,7 @@ def _quat_from_directors(Q, out) -> None:
         out[e, 0], out[e, 1], out[e, 2], out[e, 3] = w, x, y, z
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def _slerp(q, a, b, t):
     aw, ax, ay, az = q[a, 0], q[a, 1], q[a, 2], q[a, 3]
     bw, bx, by, bz = q[b, 0], q[b, 1], q[b, 2], q[b, 3]
@@ -65,7 +65,7 @@ def _slerp(q, a, b, t):
     return w / n, x / n, y / n, z / n
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def _rotate(w, x, y, z, v0, v1, v2):
     # v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z)
     c0, c1, c2 = y * v2 - z * v1, z * v0 - x * v2, x * v1 - y * v0
@@ -73,7 +73,7 @@ def _rotate(w, x, y, z, v0, v1, v2):
             v2 + 2.0 * (w * c2 + x * c1 - y * c0))
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True)
 def frame_at(q, e, t, ne):
     """Material frame (quaternion) at fraction t of element e: halfway between elements at the
     nodes, the element's own at its middle."""
@@ -173,7 +173,7 @@ class Skin:
         return self.vertices
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True)
 def _skin(pos, quats, elem, frac, frac_frame, local, local_normals, verts, normals) -> None:
     ne = quats.shape[0]
     for k in range(elem.shape[0]):

@@ -15,7 +15,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True)
 def tube_vertices(pos, Q, radius, closed, cos_t, sin_t, verts, normals) -> None:
     """Ring vertices and normals of a tube around nodes ``pos`` (N, 3) with element frames
     ``Q`` (E, 3, 3), rows d1, d2, d3), node radii ``radius`` (N), ring angles given by their

@@ -48,19 +48,19 @@ PP_S, PP_T, PP_N, PP_D0, PP_OFF, PP_KN, PP_FN, PP_KA, PP_KB, PP_SH, PP_LAG, PP_C
 PS_SET, PS_NEAR, PS_FLIPS, PS_COLS = 0, 1, 2, 3
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _point(X, a, b, w):
     return ((1.0 - w) * X[a, 0] + w * X[b, 0], (1.0 - w) * X[a, 1] + w * X[b, 1],
             (1.0 - w) * X[a, 2] + w * X[b, 2])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _travel(X, Xp, a):
     return math.sqrt((Xp[a, 0] - X[a, 0]) ** 2 + (Xp[a, 1] - X[a, 1]) ** 2
                      + (Xp[a, 2] - X[a, 2]) ** 2)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _law(rd, a, b, c, d, s, t, dt_ref, rr):
     """Penalty stiffness (N/m) and damping (N s/m) of a contact at s on segment ab, t on cd."""
     mass, node_kmin = rd.n1[N_MASS], rd.n1[N_NODE_KMIN]
@@ -71,7 +71,7 @@ def _law(rd, a, b, c, d, s, t, dt_ref, rr):
     return pair_penalty(m_i, m_j, k_floor, dt_ref, rr[0], rr[1])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def pair_plane(p, pairs, rd, X, Xp, h, rr, pp, ps) -> None:
     """Separating plane of pair ``p`` at the (sub-)step start ``X`` (``Xp``: predicted end, for
     the margin): closest-point parameters, normal, start penetration, offset, near flag."""
@@ -118,12 +118,12 @@ def pair_plane(p, pairs, rd, X, Xp, h, rr, pp, ps) -> None:
     ps[p, PS_NEAR] = 1 if -d0 < MARGIN * travel + 0.5 * reach else 0
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def n_dot(pp, p, v):
     return pp[p, PP_N] * v[0] + pp[p, PP_N + 1] * v[1] + pp[p, PP_N + 2] * v[2]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def pair_plane_forces(plist, m, pairs, rd, X, V, h, dt_ref, rr, pp, ps) -> int:
     """Forces of the island's pairs ``plist[:m]`` at the iterate (``X``, ``V``), equal and
     opposite on both segments, into ``force`` and ``contact_force``; each active pair's
@@ -198,7 +198,7 @@ def pair_plane_forces(plist, m, pairs, rd, X, V, h, dt_ref, rr, pp, ps) -> int:
     return count
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def release_pulling_pairs(plist, m, pp, ps) -> int:
     """Release the active pairs whose force pulls at the converged iterate; returns how many.
     A released pair acts again where it pushes (another rod may press its segments together
@@ -212,7 +212,7 @@ def release_pulling_pairs(plist, m, pp, ps) -> int:
     return released
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def commit_pairs(plist, m, pairs, rd, pp) -> None:
     """Accepted step: the offsets of the pairs that push carry over to their elements (the
     caller has set the island's elements to -1, not in contact)."""

@@ -21,7 +21,7 @@ V_OUT = 0.1  # m/s: the fastest a point starting inside a collider is pushed out
 _SLIP_EPS = 1e-12
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def start_offset(carried, depth, speed, dt, v_out):
     """Depth (m) a node's contact force leaves alone (explicit integrator): the offset carried
     from the last step, or for a node not in contact then, what of ``depth`` one step's
@@ -31,7 +31,7 @@ def start_offset(carried, depth, speed, dt, v_out):
     return max(depth - 2.0 * speed * dt - v_out * dt, 0.0)
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def plane_penalty(planes, p, mass, k_floor, dt_ref):
     """Penalty stiffness (N/m) and damping (N s/m) of plane ``p`` for a node of ``mass``.
 
@@ -47,7 +47,7 @@ def plane_penalty(planes, p, mass, k_floor, dt_ref):
     return k, c
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def plane_contact_node(x0, x1, x2, v0, v1, v2, fo0, fo1, fo2, mass, radius, dt,
                        p0, p1, p2, n0, n1, n2, stiffness, damping, mu_s, mu_k, off):
     """Contact force (N, lab) on one node and the normal stiffness (N/m; 0 if apart).

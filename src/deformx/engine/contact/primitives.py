@@ -24,7 +24,7 @@ _SEARCH_STEPS = 48  # golden-section steps at most: the bracket shrinks to 1e-10
 _SEARCH_TOL = 1e-10
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _box_sdf(x, y, z, hx, hy, hz):
     """Signed distance (m) and outward unit normal of a point to a box of half extents h."""
     qx = abs(x) - hx
@@ -43,7 +43,7 @@ def _box_sdf(x, y, z, hx, hy, hz):
     return d, math.copysign(ox / d, x), math.copysign(oy / d, y), math.copysign(oz / d, z)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _cylinder_sdf(x, y, z, radius, half):
     """Signed distance and outward normal to a capped cylinder along z."""
     rho = math.sqrt(x * x + y * y)
@@ -64,7 +64,7 @@ def _cylinder_sdf(x, y, z, radius, half):
     return d, ux * orr / d, uy * orr / d, sz * oz / d
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _capsule_sdf(x, y, z, radius, half):
     zc = min(max(z, -half), half)
     dz = z - zc
@@ -74,7 +74,7 @@ def _capsule_sdf(x, y, z, radius, half):
     return -radius, 1.0, 0.0, 0.0
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def shape_sdf(kind, params, x, y, z):
     """Signed distance (m, < 0 inside) and outward normal of local point (x, y, z).
 
@@ -92,7 +92,7 @@ def shape_sdf(kind, params, x, y, z):
     return _cylinder_sdf(x, y, z, params[0], params[1])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def bounding_gap(kind, params, a0, a1, a2, b0, b1, b2):
     """A lower bound (m) of the signed distance along local segment ab: its distance to the
     origin less the radius of a ball about the origin that holds the shape."""
@@ -108,7 +108,7 @@ def bounding_gap(kind, params, a0, a1, a2, b0, b1, b2):
     return math.sqrt(dist2(lerp(a, b, closest_point_segment(_ORIGIN, a, b)), _ORIGIN)) - radius
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def segment_deepest(kind, params, a0, a1, a2, b0, b1, b2):
     """Parameter s in [0, 1] of the point of local segment ab with the least signed distance."""
     if kind == SPHERE:  # distance to a point: closed form

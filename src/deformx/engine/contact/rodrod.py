@@ -38,7 +38,7 @@ from ..kernels.bundles import (
 )
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _sift_down(key, order, root, end):
     while True:
         child = 2 * root + 1
@@ -52,7 +52,7 @@ def _sift_down(key, order, root, end):
         root = child
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def argsort_heap(key):
     """Indices that sort ``key`` ascending (heapsort: O(n log n), and unlike ``np.argsort`` it
     adds well under a second to numba's first compile instead of ~10 s)."""
@@ -66,7 +66,7 @@ def argsort_heap(key):
     return order
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def build_pairs(rd, pos, pos2, skin, pairs):
     """Candidate pairs among the rods' segments (the rods' arrays ``rd``) whose padded boxes
     overlap at ``pos`` or ``pos2``; rods of different contact groups never pair.
@@ -139,7 +139,7 @@ def build_pairs(rd, pos, pos2, skin, pairs):
     return pairs, count
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def max_displacement(pos, ref, nodes) -> float:
     """Largest distance (m) of the listed nodes from their positions at the last build."""
     worst = 0.0
@@ -150,7 +150,7 @@ def max_displacement(pos, ref, nodes) -> float:
     return math.sqrt(worst)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def pair_penalty(m_i, m_j, k_floor, dt_ref, stiffness, damping):
     """Penalty stiffness (N/m) and damping (N s/m) of one rod-rod contact (automatic when
     ``stiffness`` < 0: contact frequency 0.2 / dt_ref for the lighter point, at least
@@ -164,7 +164,7 @@ def pair_penalty(m_i, m_j, k_floor, dt_ref, stiffness, damping):
     return k, c
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def pair_contact(i, j, seg_a, seg_b, radius, pos_i, pos_j, vel_i, vel_j, mass, node_kmin,
                  dt_ref, stiffness, damping, mu):
     """Contact of segments i (nodes at ``pos_i``) and j (``pos_j``): (touching, s, t, force
@@ -217,7 +217,7 @@ def pair_contact(i, j, seg_a, seg_b, radius, pos_i, pos_j, vel_i, vel_j, mass, n
     return True, s, t, (f0, f1, f2), n, k, c
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def pair_forces(pairs, n_pairs, rd, pos, vel, dt_ref, rr, out) -> int:
     """Equal and opposite forces of all touching pairs, added to ``out`` (N, per node);
     returns the number of touching pairs. ``rr``: stiffness, damping, friction."""

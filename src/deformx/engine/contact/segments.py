@@ -60,7 +60,7 @@ _TINY = 1e-12  # m: below this a closest-point normal is undefined (segment cros
 _FLAT_TOL = 1e-6
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _to_local(pose, c, x0, x1, x2):
     y0 = x0 - pose[c, 0, 3]
     y1 = x1 - pose[c, 1, 3]
@@ -70,34 +70,34 @@ def _to_local(pose, c, x0, x1, x2):
             pose[c, 0, 2] * y0 + pose[c, 1, 2] * y1 + pose[c, 2, 2] * y2)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _rotate(pose, c, x0, x1, x2):
     return (pose[c, 0, 0] * x0 + pose[c, 0, 1] * x1 + pose[c, 0, 2] * x2,
             pose[c, 1, 0] * x0 + pose[c, 1, 1] * x1 + pose[c, 1, 2] * x2,
             pose[c, 2, 0] * x0 + pose[c, 2, 1] * x1 + pose[c, 2, 2] * x2)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _to_world(pose, c, x0, x1, x2):
     """World position (m) of point x given in collider c's frame."""
     y = _rotate(pose, c, x0, x1, x2)
     return y[0] + pose[c, 0, 3], y[1] + pose[c, 1, 3], y[2] + pose[c, 2, 3]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _height(Fg, f, x) -> float:
     """Height (m) of x above face f's plane (see :mod:`deformx.engine.geometry.faces`)."""
     return Fg[f, 0, 0] * x[0] + Fg[f, 0, 1] * x[1] + Fg[f, 0, 2] * x[2] - Fg[f, 0, 3]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _outer_side(ha: float, hb: float, two_sided: bool) -> bool:
     """Whether heights ha, hb (m) put both ends of a segment strictly on the outer side of a
     plane (either side for an open mesh), so that it does not cross it."""
     return (ha > 0.0 and hb > 0.0) or (two_sided and ha < 0.0 and hb < 0.0)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _bary(Fg, f, x):
     """Barycentrics (u, v, w) of x's projection onto face f's plane (see
     :mod:`deformx.engine.geometry.faces`)."""
@@ -106,7 +106,7 @@ def _bary(Fg, f, x):
     return 1.0 - v - w, v, w
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far, within, tol):
     """The first cached face if every face within ``within`` (m) of the slot's segment lies in
     its plane (to ``tol`` m, same orientation) and the cache holds all of them; else -1."""
@@ -127,7 +127,7 @@ def _flat_patch(slot, verts, faces, Fg, qc_tris, qc_dist, n, far, within, tol):
     return ref
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _patch_face(slot, end, x, within, Fg, qc_tris, qc_dist, qc_meta):
     """A cached face within ``within`` (m) whose plane projection of x contains it, and its
     barycentrics (u, v, w); -1 if none. Tries the face that held end ``end`` last time first."""
@@ -148,14 +148,14 @@ def _patch_face(slot, end, x, within, Fg, qc_tris, qc_dist, qc_meta):
     return -1, 0.0, 0.0, 0.0
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _inside(Fg, f, x) -> bool:
     """Whether x projects into face f."""
     u, v, w = _bary(Fg, f, x)
     return u >= 0.0 and v >= 0.0 and w >= 0.0
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _moved(qc_geo, slot, la, lb) -> float:
     """Largest coordinate change (m) of local ends la, lb since the slot's cache was filled."""
     return max(abs(la[0] - qc_geo[slot, 0]), abs(la[1] - qc_geo[slot, 1]),
@@ -163,7 +163,7 @@ def _moved(qc_geo, slot, la, lb) -> float:
                abs(lb[1] - qc_geo[slot, 4]), abs(lb[2] - qc_geo[slot, 5]))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, Fg, la,
                   lb, reach, skin, two_sided, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound):
     """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache;
@@ -265,7 +265,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     return tri, rs, ru, rv, rw, best, fresh
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount, Border, Fn,
                   En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound, slot, pa, pb,
                   reach):
@@ -335,7 +335,7 @@ def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, B
     return True, s, sd, _rotate(pose, c, n[0], n[1], n[2]), _to_world(pose, c, q[0], q[1], q[2])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _shape_closest(c, kind, pose, par, pa, pb, reach):
     """Deepest point of world segment pa-pb against analytic shape collider ``c`` within
     ``reach`` (m); returns as ``_mesh_closest``."""
@@ -357,7 +357,7 @@ def _shape_closest(c, kind, pose, par, pa, pb, reach):
                                                                  p1 - sd * n1, p2 - sd * n2)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def collider_penalty(par, c, mass, k_floor, dt_ref):
     """Penalty stiffness (N/m) and damping (N s/m) of collider ``c`` for a contact of ``mass``:
     automatic (contact frequency 0.2 / dt_ref, at least ``k_floor``, critically damped) or the
@@ -371,7 +371,7 @@ def collider_penalty(par, c, mass, k_floor, dt_ref):
     return k, damp
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _relative_velocity(pose, twist, c, u, q):
     """Velocity (m/s) of a rod point moving with ``u`` relative to collider ``c``'s surface
     point ``q`` (world), and q's offset from the collider's origin (m)."""
@@ -383,7 +383,7 @@ def _relative_velocity(pose, twist, c, u, q):
              u[2] - (twist[c, 2] + twist[c, 3] * ry - twist[c, 4] * rx)), (rx, ry, rz))
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _add_reaction(wrench, r, c, rq, f) -> None:
     """Adds -f acting at offset ``rq`` (m) from collider c's origin to its wrench."""
     wrench[r, c, 0] -= f[0]
@@ -394,7 +394,7 @@ def _add_reaction(wrench, r, c, rq, f) -> None:
     wrench[r, c, 5] -= rq[0] * f[1] - rq[1] * f[0]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _penalty_friction(kc, cc, mu_s, mu_k, h, p, w, n, depth, A, use_anchor):
     """Force (N, world) of one contact of penetration ``depth`` (m) at point ``p`` moving with
     ``w`` relative to the surface (normal ``n``): penalty ``kc`` (N/m), ``cc`` (N s/m), and the
@@ -450,14 +450,14 @@ def _penalty_friction(kc, cc, mu_s, mu_k, h, p, w, n, depth, A, use_anchor):
     return True, (f0, f1, f2), kt, A
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _add_K(el_K, e, q, w, kn, kt, n):
     for i in range(3):
         for j in range(3):
             el_K[e, q, i, j] += w * ((kn - kt) * n[i] * n[j] + (kt if i == j else 0.0))
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, cols, commit,
                           want_K) -> int:
     """Add the contact forces of rod ``r`` with every collider; returns the contact count.

@@ -76,7 +76,7 @@ STICK_ZONE = 1e-6
 MARGIN = 2.0  # the speculative margin is this many times the step's relative travel
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def switch_active(state, flips, fn, max_flips):
     """(acts, state, flips) of a contact whose force law gives ``fn`` (N) at the iterate: it
     acts where it pushes; after ``max_flips`` switches within the step an active contact
@@ -89,7 +89,7 @@ def switch_active(state, flips, fn, max_flips):
     return push, ACTIVE if push else INACTIVE, flips + 1
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _frame_point(src, n_planes, pose, q0, q1, q2):
     """World point of a point given in the frame of ``src`` (world planes: the world)."""
     if src < n_planes:
@@ -97,21 +97,21 @@ def _frame_point(src, n_planes, pose, q0, q1, q2):
     return _to_world(pose, src - n_planes, q0, q1, q2)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _frame_vector(src, n_planes, pose, v0, v1, v2):
     if src < n_planes:
         return v0, v1, v2
     return _rotate(pose, src - n_planes, v0, v1, v2)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _local_point(src, n_planes, pose, x0, x1, x2):
     if src < n_planes:
         return x0, x1, x2
     return _to_local(pose, src - n_planes, x0, x1, x2)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _local_vector(src, n_planes, pose, v0, v1, v2):
     if src < n_planes:
         return v0, v1, v2
@@ -121,7 +121,7 @@ def _local_vector(src, n_planes, pose, v0, v1, v2):
             pose[c, 0, 2] * v0 + pose[c, 1, 2] * v1 + pose[c, 2, 2] * v2)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _surface_velocity(src, n_planes, pose, twist, q):
     """Velocity (m/s, world) of the surface point q (world) of ``src`` (planes do not move)."""
     if src < n_planes:
@@ -133,7 +133,7 @@ def _surface_velocity(src, n_planes, pose, twist, q):
             twist[c, 2] + twist[c, 3] * ry - twist[c, 4] * rx)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, src, gap, q, n, s, pose, n_planes):
     """Offer a plane of ``src`` (gap in m, point q and normal n in the world) to ``slot``:
     the ``SP_K`` nearest of different sources are kept (``keep_*`` holds the candidates)."""
@@ -159,7 +159,7 @@ def _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, src, gap, q, n, s, pose, 
     keep_n[k, 6] = s
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
     """Replace the slot's planes by the candidates, carrying over the friction anchor of a
     source that was there before; a new anchor is the slot's point at the step start
@@ -198,7 +198,7 @@ def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
             sp_f[slot, k, SP_AS] = s_start
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _n_queries(nn, ne, cols):
     """How many of a rod's slots can hold a plane: its nodes and, with colliders, its
     segments (world planes act on nodes only; colliders are never removed, so without any a
@@ -209,7 +209,7 @@ def _n_queries(nn, ne, cols):
     return nn + ne if n_cols > 0 else nn
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _slot(k, n0, nn, e0, n_nodes, node_radius):
     """The ``k``-th query of a rod (its nodes, then its elements): whether it is a node, its
     end nodes a, b (a == b for a node), element (-1 for a node), slot and radius (m)."""
@@ -220,7 +220,7 @@ def _slot(k, n0, nn, e0, n_nodes, node_radius):
     return False, a, b, e0 + k - nn, n_nodes + e0 + k - nn, 0.5 * (node_radius[a] + node_radius[b])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, sp_f, keep_src,
                   keep_f, keep_n, x_start) -> int:
     """Find each slot's contact planes at the step start (positions ``X``, velocities ``V``;
@@ -317,7 +317,7 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
     return found
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _plane_of(sp_f, slot, k, src, n_planes, pose):
     q = _frame_point(src, n_planes, pose, sp_f[slot, k, SP_Q], sp_f[slot, k, SP_Q + 1],
                      sp_f[slot, k, SP_Q + 2])
@@ -326,7 +326,7 @@ def _plane_of(sp_f, slot, k, src, n_planes, pose):
     return q, n
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _node_pen(sp_i, sp_f, i, src):
     """Penetration (m, >= 0) of node ``i`` into the plane it has from ``src`` (0 if none), as
     last evaluated."""
@@ -336,7 +336,7 @@ def _node_pen(sp_i, sp_f, i, src):
     return 0.0
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _law(src, n_planes, planes, par, mass, kmin, dt_ref):
     """Penalty stiffness (N/m), damping (N s/m) and friction coefficients of a source."""
     if src < n_planes:
@@ -347,7 +347,7 @@ def _law(src, n_planes, planes, par, mass, kmin, dt_ref):
     return k, c, par[col, P_MUS], par[col, P_MUK]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _add_contact_K(el_K, e, q, wn, wt, kn, ka, kb, n, sh):
     """Add one contact's stiffness to block ``q`` of element ``e``: ``wn kn n n^T`` (normal)
     plus ``wt`` times the friction's (``ka`` along the force direction ``sh``, ``kb`` across it
@@ -358,7 +358,7 @@ def _add_contact_K(el_K, e, q, wn, wt, kn, ka, kb, n, sh):
             el_K[e, q, i, j] += wn * kn * n[i] * n[j] + wt * (ka * sh[i] * sh[j] + kb * tij)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i, sp_f, commit,
                  stats) -> int:
     """Add the contact forces of rod ``r``'s slot planes at the iterate (positions ``X``,
@@ -504,7 +504,7 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
     return count
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def start_penetrations(r, n0, nn, e0, ne, h, X, planes, rd, cols, sp_i, sp_f, n_nodes):
     """Store each slot plane's penetration at the step start (``X``) as its ``d0``, and the
     depth its force leaves alone this step (``SP_OFF``): for a plane new to the slot what lies
@@ -534,7 +534,7 @@ def start_penetrations(r, n0, nn, e0, ne, h, X, planes, rd, cols, sp_i, sp_f, n_
             sp_f[slot, j, SP_OFF] = max(off - V_OUT * h, 0.0)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> None:
     """Move predicted node positions ``X`` that penetrate their contact planes back onto them
     (a Newton starting guess that already respects the contacts; ``fixed`` marks the
@@ -560,7 +560,7 @@ def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> None
                     X[i, d] += pen * n[d]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def release_pulling(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
     """At a converged iterate: release the active planes whose force pulls, and re-engage
     released planes that are now deeper than where their force starts (a release elsewhere
@@ -580,7 +580,7 @@ def release_pulling(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
     return count
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def freeze_friction_bounds(n0, nn, e0, ne, n_nodes, n_planes, sp_i, sp_f) -> int:
     """Fix the friction bound (mu N) of each acting collider plane at its normal force at the
     iterate, for the rest of the step; returns how many. World planes keep theirs: a rope

@@ -49,7 +49,7 @@ class MeshBVH(NamedTuple):
     order: np.ndarray  # (F,) int64, triangle ids grouped by leaf
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _select(order: np.ndarray, key: np.ndarray, lo: int, hi: int, k: int) -> None:
     """Reorders ``order[lo:hi]`` in place so that slot k holds the k-th smallest key, with no
     larger key before it and no smaller one after it (quickselect, Hoare partition)."""
@@ -86,7 +86,7 @@ def _select(order: np.ndarray, key: np.ndarray, lo: int, hi: int, k: int) -> Non
             return
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def build_bvh(vertices: np.ndarray, faces: np.ndarray):
     """Builds the BVH of triangles ``vertices[faces]``; returns (lo, hi, left, right, start,
     count, order) as described in the module docstring. Expects validated input."""
@@ -245,20 +245,20 @@ def _normalized(x: np.ndarray) -> np.ndarray:
     return np.divide(x, norm, out=np.zeros_like(x), where=norm > 0.0)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def traversal_stack():
     """Scratch for one BVH traversal: node ids and their squared box gaps (m^2)."""
     return np.empty(TRAVERSAL_STACK, dtype=np.int64), np.empty(TRAVERSAL_STACK)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _gap2(lo0: float, hi0: float, lo1: float, hi1: float) -> float:
     """Squared gap (m^2) between intervals [lo0, hi0] and [lo1, hi1] (0 if they overlap)."""
     d = max(lo0 - hi1, lo1 - hi0, 0.0)
     return d * d
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _box_gap2(lo, hi, node, slo, shi) -> float:
     """Squared distance (m^2) between node's box and the box slo-shi; a lower bound."""
     return (_gap2(lo[node, 0], hi[node, 0], slo[0], shi[0])
@@ -266,7 +266,7 @@ def _box_gap2(lo, hi, node, slo, shi) -> float:
             + _gap2(lo[node, 2], hi[node, 2], slo[2], shi[2]))
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _centre_dist2(lo, hi, node, x) -> float:
     """Squared distance (m^2) from node's box centre to point x."""
     d0 = 0.5 * (lo[node, 0] + hi[node, 0]) - x[0]
@@ -275,7 +275,7 @@ def _centre_dist2(lo, hi, node, x) -> float:
     return d0 * d0 + d1 * d1 + d2 * d2
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _nearer_first(lo, hi, a, b, slo, shi, mid):
     """Children a, b reordered nearer first, with their box gaps to the segment's box.
 
@@ -291,7 +291,7 @@ def _nearer_first(lo, hi, a, b, slo, shi, mid):
     return a, b, ga, gb
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _push_children(lo, hi, a, b, slo, shi, mid, limit2, stack, bound, sp) -> int:
     """Push children a, b whose box gap^2 to the segment's box is within ``limit2`` (m^2),
     the nearer one last so that it is searched first; returns the new stack size."""
@@ -307,7 +307,7 @@ def _push_children(lo, hi, a, b, slo, shi, mid, limit2, stack, bound, sp) -> int
     return sp
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _corners(vertices, faces, f):
     """The three corners (m) of triangle ``f`` as tuples."""
     return ((vertices[faces[f, 0], 0], vertices[faces[f, 0], 1], vertices[faces[f, 0], 2]),
@@ -315,7 +315,7 @@ def _corners(vertices, faces, f):
             (vertices[faces[f, 2], 0], vertices[faces[f, 2], 1], vertices[faces[f, 2], 2]))
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _beyond(va, vb, vc, p0, p1, slo, shi, reach2) -> bool:
     """True if triangle va-vb-vc is surely farther than sqrt(reach2) from segment p0p1.
 
@@ -334,7 +334,7 @@ def _beyond(va, vb, vc, p0, p1, slo, shi, reach2) -> bool:
     return gap > 0.0 and gap * gap > reach2
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
                         max_dist, root=0):
     """Triangle nearest to segment p0p1 (tuples, m) among those within ``max_dist`` (m).
@@ -350,7 +350,7 @@ def bvh_closest_segment(lo, hi, left, right, start, count, order, vertices, face
                                   p1, max_dist, root, stack, bound)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def closest_segment_search(lo, hi, left, right, start, count, order, vertices, faces, p0, p1,
                            max_dist, root, stack, bound):
     """``bvh_closest_segment`` with its traversal scratch passed in (``traversal_stack``): it
@@ -395,7 +395,7 @@ def closest_segment_search(lo, hi, left, right, start, count, order, vertices, f
     return tri, rs, ru, rv, rw, best
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def signed_side(face_n, edge_n, vertex_n, faces, tri, u, v, w, p, c) -> float:
     """+1.0 if point p (m) is outside the closed mesh, -1.0 if inside (+1.0 on the surface).
 
@@ -430,7 +430,7 @@ def signed_side(face_n, edge_n, vertex_n, faces, tri, u, v, w, p, c) -> float:
     return math.copysign(1.0, d) if d != 0.0 else 1.0
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0, p1, max_dist,
                   out_tri, out_dist, root=0):
     """The ``k = len(out_tri)`` triangles nearest to segment p0p1 (m) within ``max_dist`` (m).
@@ -447,7 +447,7 @@ def bvh_nearest_k(lo, hi, left, right, start, count, order, vertices, faces, p0,
                             max_dist, out_tri, out_dist, root, stack, bound)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def nearest_k_search(lo, hi, left, right, start, count, order, vertices, faces, p0, p1, max_dist,
                      out_tri, out_dist, root, stack, bound):
     """``bvh_nearest_k`` with its traversal scratch passed in (see ``closest_segment_search``)."""

@@ -21,7 +21,7 @@ _PARALLEL = 1e-24
 _FLAT = 1e-14
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _clamp01(x: float) -> float:
     if x < 0.0:
         return 0.0
@@ -30,28 +30,28 @@ def _clamp01(x: float) -> float:
     return x
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _sub(a, b):
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _dot(a, b) -> float:
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def lerp(a, b, t: float):
     """Point ``a + t (b - a)`` (m) of segment ab."""
     return (a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1]), a[2] + t * (b[2] - a[2]))
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def bary_point(a, b, c, u: float, v: float, w: float):
     """Point ``u a + v b + w c`` (m) of triangle abc."""
     return (u * a[0] + v * b[0] + w * c[0],
@@ -59,7 +59,7 @@ def bary_point(a, b, c, u: float, v: float, w: float):
             u * a[2] + v * b[2] + w * c[2])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def dist2(a, b) -> float:
     """Squared distance (m^2) between points a and b."""
     d0 = a[0] - b[0]
@@ -68,7 +68,7 @@ def dist2(a, b) -> float:
     return d0 * d0 + d1 * d1 + d2 * d2
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def closest_point_segment(p, a, b) -> float:
     """Parameter t in [0, 1] of the point of segment ab closest to p (0 when a == b)."""
     ab = _sub(b, a)
@@ -79,7 +79,7 @@ def closest_point_segment(p, a, b) -> float:
     return _clamp01(_dot(_sub(p, a), ab) / denom)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def closest_segment_segment(p0, p1, q0, q1) -> tuple[float, float]:
     """Parameters (s, t) in [0, 1] of a closest pair of segments p0p1 and q0q1.
 
@@ -120,7 +120,7 @@ def closest_segment_segment(p0, p1, q0, q1) -> tuple[float, float]:
     return s, t
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _closest_point_triangle_edges(p, a, b, c) -> tuple[float, float, float]:
     """Barycentrics of the closest point to p on the boundary of abc (any triangle)."""
     t_ab = closest_point_segment(p, a, b)
@@ -136,7 +136,7 @@ def _closest_point_triangle_edges(p, a, b, c) -> tuple[float, float, float]:
     return t_ca, 0.0, 1.0 - t_ca
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def closest_point_triangle(p, a, b, c) -> tuple[float, float, float]:
     """Barycentrics (u, v, w) of the point of triangle abc closest to p.
 
@@ -184,7 +184,7 @@ def closest_point_triangle(p, a, b, c) -> tuple[float, float, float]:
     return 1.0 - v - w, v, w
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def closest_segment_triangle(p0, p1, a, b, c) -> tuple[float, float, float, float]:
     """A closest pair (s, u, v, w) of segment p0p1 (parameter s) and triangle abc.
 
@@ -244,7 +244,7 @@ def closest_segment_triangle(p0, p1, a, b, c) -> tuple[float, float, float, floa
     return rs, ru, rv, rw
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def segment_triangle_dist2(p0, p1, point: bool, a, b, c) -> tuple[float, float, float, float,
                                                                      float]:
     """A closest pair (s, u, v, w) of segment p0p1 and triangle abc and its squared distance

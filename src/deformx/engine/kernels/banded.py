@@ -20,7 +20,7 @@ from .refcount import NO_REFCOUNT
 BLOCK_BAND = 2  # coupled blocks are at most this many apart
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _load(A, I, d):
     """Block A[I, d] as a tuple, row-major."""
     return (A[I, d, 0, 0], A[I, d, 0, 1], A[I, d, 0, 2],
@@ -28,7 +28,7 @@ def _load(A, I, d):
             A[I, d, 2, 0], A[I, d, 2, 1], A[I, d, 2, 2])
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def store_block(A, I, d, m) -> None:
     """A[I, d] <- the block ``m`` (row-major tuple)."""
     A[I, d, 0, 0], A[I, d, 0, 1], A[I, d, 0, 2] = m[0], m[1], m[2]
@@ -36,14 +36,14 @@ def store_block(A, I, d, m) -> None:
     A[I, d, 2, 0], A[I, d, 2, 1], A[I, d, 2, 2] = m[6], m[7], m[8]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _load_lower(A, I):
     """Lower triangle of the diagonal block A[I, 0]: (00, 10, 11, 20, 21, 22)."""
     return (A[I, 0, 0, 0], A[I, 0, 1, 0], A[I, 0, 1, 1], A[I, 0, 2, 0], A[I, 0, 2, 1],
             A[I, 0, 2, 2])
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def add_lower(A, I, s) -> None:
     """A[I, 0] += ``s`` on the lower triangle (``s`` as in :func:`_load_lower`)."""
     A[I, 0, 0, 0] += s[0]
@@ -54,7 +54,7 @@ def add_lower(A, I, s) -> None:
     A[I, 0, 2, 2] += s[5]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _sub_abt(m, x, y):
     """m - x @ y^T (3x3, row-major tuples)."""
     return (m[0] - (x[0] * y[0] + x[1] * y[1] + x[2] * y[2]),
@@ -68,7 +68,7 @@ def _sub_abt(m, x, y):
             m[8] - (x[6] * y[6] + x[7] * y[7] + x[8] * y[8]))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _sub_abt_lower(s, x, y):
     """Lower triangle of s - x @ y^T (``s`` and the result as in :func:`_load_lower`), for a
     symmetric x @ y^T."""
@@ -80,7 +80,7 @@ def _sub_abt_lower(s, x, y):
             s[5] - (x[6] * y[6] + x[7] * y[7] + x[8] * y[8]))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _times_sym(m, s):
     """m @ S, ``S`` symmetric given by its lower triangle as in :func:`_load_lower`."""
     return (m[0] * s[0] + m[1] * s[1] + m[2] * s[3], m[0] * s[1] + m[1] * s[2] + m[2] * s[4],
@@ -91,7 +91,7 @@ def _times_sym(m, s):
             m[6] * s[3] + m[7] * s[4] + m[8] * s[5])
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _sym_inverse(s):
     """(ok, inverse) of the symmetric 3x3 block whose lower triangle is ``s`` (both as in
     :func:`_load_lower`); ok is False unless it is positive definite (leading minors > 0).
@@ -112,13 +112,13 @@ def _sym_inverse(s):
                   minor2 * inv)
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _store_sym(A, I, s) -> None:
     """Store a symmetric block (lower triangle ``s`` as in :func:`_load_lower`) in A[I, 0]."""
     store_block(A, I, 0, (s[0], s[1], s[3], s[1], s[2], s[4], s[3], s[4], s[5]))
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def block_cholesky(A, nb) -> int:
     """In-place square-root-free block Cholesky ``A = L D L^T`` (``L`` unit block lower
     triangular) of the first ``nb`` block rows; 0, or 1 + the first block row whose pivot
@@ -160,7 +160,7 @@ def block_cholesky(A, nb) -> int:
     return 0
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _sub_ax(r, m, x):
     """r - m @ x (3-vectors as tuples, ``m`` a row-major block)."""
     return (r[0] - (m[0] * x[0] + m[1] * x[1] + m[2] * x[2]),
@@ -168,7 +168,7 @@ def _sub_ax(r, m, x):
             r[2] - (m[6] * x[0] + m[7] * x[1] + m[8] * x[2]))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _sub_atx(r, m, x):
     """r - m^T @ x."""
     return (r[0] - (m[0] * x[0] + m[3] * x[1] + m[6] * x[2]),
@@ -176,7 +176,7 @@ def _sub_atx(r, m, x):
             r[2] - (m[2] * x[0] + m[5] * x[1] + m[8] * x[2]))
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def block_solve(A, nb, x) -> None:
     """Solve ``L D L^T x = b`` in place (``x`` holds b, shape (nb, 3)) with the block factor.
 

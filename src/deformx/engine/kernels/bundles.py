@@ -181,7 +181,7 @@ def _borrow(typingctx, buf, offset, shape):
     return view(buf, offset, shape), codegen
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def borrow(buf, offset, shape):
     """A C-contiguous ``shape`` view of the 1-D ``buf`` from ``offset`` without reference
     counting (passing counted views costs two atomic operations each time): the caller keeps
@@ -189,32 +189,32 @@ def borrow(buf, offset, shape):
     return _borrow(buf, offset, shape)
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def _f(F, L, k):
     return _borrow(F, L[k, 0], (L[k, 1],))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def _f2(F, L, k):
     return _borrow(F, L[k, 0], (L[k, 1], L[k, 2]))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def _f3(F, L, k):
     return _borrow(F, L[k, 0], (L[k, 1], L[k, 2], L[k, 3]))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def _f4(F, L, k):
     return _borrow(F, L[k, 0], (L[k, 1], L[k, 2], L[k, 3], L[k, 4]))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def _layout(I):
     return _borrow(I, 1, (I[0], 5))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def carve_rods(F, I):
     """The rods group's arrays (see ``ROD_ARRAYS``)."""
     L = _layout(I)
@@ -225,7 +225,7 @@ def carve_rods(F, I):
                 _f(I, L, 20))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always")
+@njit(cache=True, inline="always")
 def carve_env(F, I):
     L = _layout(I)
     return Env(_f(I, L, 0), _f(I, L, 1), _f(I, L, 2), _f(I, L, 3), _f2(F, L, 4), _f(I, L, 5),
@@ -233,7 +233,7 @@ def carve_env(F, I):
                _f3(F, L, 11))
 
 
-@njit(cache=True, fastmath={"contract"})
+@njit(cache=True)
 def _carve_cols(F, I):
     L = _layout(I)
     return Colliders(

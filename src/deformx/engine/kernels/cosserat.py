@@ -43,7 +43,7 @@ from .bundles import (
 from .refcount import NO_REFCOUNT
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed):
     """First node, element and Voronoi index of rod ``r`` in the packed arrays, and its
     element, node and Voronoi counts (a closed rod has as many nodes as elements)."""
@@ -54,7 +54,7 @@ def rod_extent(r, rod_node0, rod_elem0, rod_vor0, rod_ne, rod_closed):
     return rod_node0[r], rod_elem0[r], rod_vor0[r], ne, nn, nv, closed
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def rod_internal_loads(r: int, rd) -> None:
     """Write internal forces (lab, N) and torques (material, N m) of rod ``r`` (bundles:
     the rods' arrays ``rd``, see :mod:`.bundles`).

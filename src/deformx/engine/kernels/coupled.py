@@ -28,7 +28,7 @@ from .refcount import NO_REFCOUNT
 from .verlet import OK, advance_rod
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _step_rods(t, sim, rd, env, cols, first, last):
     """One explicit step of every rod with the rod-rod forces ``rd.n3[N_EXTRA]``; returns the first
     rod that diverged, or -1. A function of its own, without reference counting (see
@@ -41,7 +41,7 @@ def _step_rods(t, sim, rd, env, cols, first, last):
     return -1
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _refresh_pairs(pos, pos2, skin, force_build, rd, pairs):
     """Rebuild the candidate pairs when needed; returns the (possibly grown) pair array."""
     state, ref, nodes = rd.pair_state, rd.n3[N_REF], rd.nodes
@@ -57,7 +57,7 @@ def _refresh_pairs(pos, pos2, skin, force_build, rd, pairs):
     return pairs
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def advance_world_verlet(n_steps, t, sim, rd, env, cols, pairs):
     """Advance all rods ``n_steps`` explicit steps with rod-rod contact; returns the pairs."""
     dt = sim[SIM_DT]
@@ -85,7 +85,7 @@ def advance_world_verlet(n_steps, t, sim, rd, env, cols, pairs):
     return pairs
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _find(parent, r):
     while parent[r] != r:
         parent[r] = parent[parent[r]]
@@ -93,7 +93,7 @@ def _find(parent, r):
     return r
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def advance_world_implicit(n_steps, t, sim, opts, rd, env, cols, pairs):
     """Advance all rods ``n_steps`` stable steps with rod-rod contact; returns the pairs.
 

@@ -23,7 +23,7 @@ from .so3 import rodrigues_coefficients
 from .refcount import NO_REFCOUNT
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def exp_times(w0, w1, w2, tau, R):
     """Exp(tau [w]) R for a row-major 3x3 tuple ``R`` (Rodrigues' formula)."""
     p0 = tau * w0
@@ -51,7 +51,7 @@ def exp_times(w0, w1, w2, tau, R):
             e20 * R[2] + e21 * R[5] + e22 * R[8])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def load_drivers(dl, drv, r, env, cols) -> None:
     """Rod ``r``'s copy of the drivers it uses (its clamps', the colliders') from the table:
     copying every row for every rod cost O(rods x drivers) per call in a batch of
@@ -65,14 +65,14 @@ def load_drivers(dl, drv, r, env, cols) -> None:
             _copy_row(dl, drv, cols.drv[c])
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _begin(dl, d, dt) -> None:
     for j in range(3):
         dl[d, D_V + j] += dt * dl[d, D_A + j]
         dl[d, D_W + j] += dt * dl[d, D_AL + j]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _end(dl, d, dt) -> None:
     R = exp_times(dl[d, D_W], dl[d, D_W + 1], dl[d, D_W + 2], dt, _rot(dl, d))
     for j in range(3):
@@ -81,21 +81,21 @@ def _end(dl, d, dt) -> None:
         dl[d, D_R + j] = R[j]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def begin_step(dl, dt) -> None:
     """Rates of every driver for the coming step: v += a dt, w += alpha dt."""
     for d in range(dl.shape[0]):
         _begin(dl, d, dt)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def end_step(dl, dt) -> None:
     """Pose of every driver at the step's end: p += dt v, R <- Exp(dt w) R."""
     for d in range(dl.shape[0]):
         _end(dl, d, dt)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def step_rod_drivers(dl, dt, r, env, cols, end) -> None:
     """``begin_step`` (or with ``end`` ``end_step``) of only the drivers rod ``r`` uses: its
     clamps' (each once) and the colliders' (a batch of rods then does not integrate every
@@ -122,7 +122,7 @@ def step_rod_drivers(dl, dt, r, env, cols, end) -> None:
                 _begin(dl, cols.drv[c], dt)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def store_drivers(drv, env, cols, r0, r1) -> None:
     """The drivers advanced by rods r0 .. r1 - 1 back into the table: each clamp's from its
     rod's copy, the colliders' from the first rod's."""
@@ -136,27 +136,27 @@ def store_drivers(drv, env, cols, r0, r1) -> None:
             _copy_row(drv, env.dloc[r0], cols.drv[c])
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _copy_row(dst, src, d) -> None:
     for j in range(src.shape[1]):
         dst[d, j] = src[d, j]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _rot(dl, d):
     b = D_R
     return (dl[d, b], dl[d, b + 1], dl[d, b + 2], dl[d, b + 3], dl[d, b + 4], dl[d, b + 5],
             dl[d, b + 6], dl[d, b + 7], dl[d, b + 8])
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def origin_at(dl, d, tau):
     """Position of driver ``d``'s origin ``tau`` s into the step (no rotation needed)."""
     return (dl[d, D_P] + tau * dl[d, D_V], dl[d, D_P + 1] + tau * dl[d, D_V + 1],
             dl[d, D_P + 2] + tau * dl[d, D_V + 2])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def pose_at(dl, d, tau):
     """Position and rotation (row-major tuple) of driver ``d`` ``tau`` s into the step."""
     R = exp_times(dl[d, D_W], dl[d, D_W + 1], dl[d, D_W + 2], tau, _rot(dl, d))
@@ -164,7 +164,7 @@ def pose_at(dl, d, tau):
             dl[d, D_P + 2] + tau * dl[d, D_V + 2]), R
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def clamp_values(tau, c0, c1, f0, f1, pos, Q, env, dl) -> None:
     """Clamped nodes and frames of one rod at ``tau`` s into the step."""
     for c in range(c0, c1):
@@ -183,7 +183,7 @@ def clamp_values(tau, c0, c1, f0, f1, pos, Q, env, dl) -> None:
                 Q[e, a, b] = R[3 * b] * rel[0, a] + R[3 * b + 1] * rel[1, a] + R[3 * b + 2] * rel[2, a]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def clamp_rate(dl, d, r0, r1, r2):
     """Velocity (m/s) of the point at world offset r from driver d's origin."""
     w0, w1, w2 = dl[d, D_W], dl[d, D_W + 1], dl[d, D_W + 2]
@@ -191,7 +191,7 @@ def clamp_rate(dl, d, r0, r1, r2):
             dl[d, D_V + 2] + w0 * r1 - w1 * r0)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def clamp_rates(tau, c0, c1, f0, f1, pos, vel, Q, omega, env, dl) -> None:
     """Clamped nodes and frames of one rod take their driver's rates (angular: world ->
     material frame)."""
@@ -210,7 +210,7 @@ def clamp_rates(tau, c0, c1, f0, f1, pos, vel, Q, omega, env, dl) -> None:
                            + Q[e, j, 2] * dl[d, D_W + 2])
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def clear_reactions(r, c0, c1, f0, f1, env) -> None:
     for c in range(c0, c1):
         for j in range(6):
@@ -220,7 +220,7 @@ def clear_reactions(r, c0, c1, f0, f1, env) -> None:
             env.dreact[r, env.fcon_drv[c], j] = 0.0
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def add_node_reaction(r, d, tau, x0, x1, x2, f0, f1, f2, env, dl) -> None:
     """Force f (N, world) of the rod on driver d at point x, and its moment about the
     driver's origin at ``tau`` s into the step."""
@@ -234,14 +234,14 @@ def add_node_reaction(r, d, tau, x0, x1, x2, f0, f1, f2, env, dl) -> None:
     env.dreact[r, d, 5] += r0 * f1 - r1 * f0
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def add_frame_reaction(r, d, Q, e, t0, t1, t2, env) -> None:
     """Torque t (N m, material frame of element e) of the rod on driver d."""
     for j in range(3):
         env.dreact[r, d, 3 + j] += Q[e, 0, j] * t0 + Q[e, 1, j] * t1 + Q[e, 2, j] * t2
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def add_impulse(r, h, c0, c1, f0, f1, env) -> None:
     """Accumulate ``h`` s of the last reactions of the rod's clamp drivers (each once)."""
     for c in range(c0, c1):
@@ -256,7 +256,7 @@ def add_impulse(r, h, c0, c1, f0, f1, env) -> None:
                 env.dimp[r, d, j] += h * env.dreact[r, d, j]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _seen(env, c0, c1, f0, f1, d) -> bool:
     """Whether driver d holds one of the node clamps c0..c1 or frame clamps f0..f1."""
     for c in range(c0, c1):
@@ -268,7 +268,7 @@ def _seen(env, c0, c1, f0, f1, d) -> bool:
     return False
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def collider_poses(r, tau, cols, dl) -> None:
     """Poses and twists of every collider as rod ``r`` sees them ``tau`` s into the step."""
     for c in range(cols.kind.shape[0]):
@@ -282,7 +282,7 @@ def collider_poses(r, tau, cols, dl) -> None:
             cols.twist[r, c, 3 + a] = dl[d, D_W + a]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def collider_impulses(r, h, cols, env) -> None:
     """Copy rod ``r``'s last contact wrench on each collider to its driver's reaction and
     accumulate ``h`` s of it into the impulse."""
@@ -293,7 +293,7 @@ def collider_impulses(r, h, cols, env) -> None:
             env.dimp[r, d, j] += h * cols.wrench[r, c, j]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def gather_impulses(base, dimp, owner, index, out) -> None:
     """``out[k] = base[d] + sum over rods of dimp[:, d]`` for ``d = index[k]`` (the array form
     of ``Driver.impulse``; numpy's fancy indexing costs ~10 us a call here). ``owner[d]``: the
@@ -312,7 +312,7 @@ def gather_impulses(base, dimp, owner, index, out) -> None:
             out[k, j] = v
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def clear_impulses(base, dimp, owner, index) -> None:
     """Zero the impulses of drivers ``index`` (the array form of ``reset_impulse``)."""
     for k in range(index.shape[0]):

@@ -76,7 +76,7 @@ EXTEND, EXTEND_RATE = 4, 0.8
 _DEBUG = False
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _add_block(A, I, J, m):
     """Add the 3x3 block ``m`` (row-major tuple) at block row ``I``, block column ``J``.
 
@@ -96,25 +96,25 @@ def _add_block(A, I, J, m):
             A[I, d, i, j] += m[3 * j + i] if transpose else m[3 * i + j]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _qsq(Q, e, i, j, s0, s1, s2):
     """Entry (i, j) of Q[e]^T diag(s) Q[e]."""
     return Q[e, 0, i] * s0 * Q[e, 0, j] + Q[e, 1, i] * s1 * Q[e, 1, j] + Q[e, 2, i] * s2 * Q[e, 2, j]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _rel(Q, ea, eb, i, m):
     """Entry (i, m) of Q[eb] Q[ea]^T."""
     return Q[eb, i, 0] * Q[ea, m, 0] + Q[eb, i, 1] * Q[ea, m, 1] + Q[eb, i, 2] * Q[ea, m, 2]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _rtbr(R, i, m, b0, b1, b2):
     """Entry (i, m) of R^T diag(b) R, ``R`` a row-major tuple."""
     return R[i] * b0 * R[m] + R[3 + i] * b1 * R[3 + m] + R[6 + i] * b2 * R[6 + m]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _assemble(h, ext, rd, nu, kv, geometric, A):
     """Newton matrix of one rod (extent ``ext``, see ``rod_extent``) into ``A`` (block band);
     returns the number of block rows.
@@ -239,7 +239,7 @@ def _assemble(h, ext, rd, nu, kv, geometric, A):
     return nb
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _rod_contacts(r, ext, h, rd, planes, cols, commit):
     """Contact forces of rod ``r``'s slot planes (world planes, meshes, primitives) at the
     iterate into ``force`` and ``contact_force`` (cleared first), their stiffness into
@@ -262,7 +262,7 @@ def _rod_contacts(r, ext, h, rd, planes, cols, commit):
                         rd.n3[N_VEL], planes, rd, cols, rd.sp_i, rd.sp_f, commit, rd.stats[r])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _add_element_stiffness(A, e0, ne, nn, el_K):
     """Add each element's contact stiffness blocks (node a-a, b-a, b-b) to the Newton matrix."""
     for k in range(ne):
@@ -283,7 +283,7 @@ def _add_element_stiffness(A, e0, ne, nn, el_K):
                     A[0, 0, i, j] += el_K[e, 2, i, j]
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _implied_rates(n0, nn, e0, ne, inv_h, pos, xn, Q, Qn, vel, omega):
     """Backward-Euler velocities of the iterate: (x - x_n) / h and log(Q Q_n^T) / h."""
     for i in range(n0, n0 + nn):
@@ -296,12 +296,12 @@ def _implied_rates(n0, nn, e0, ne, inv_h, pos, xn, Q, Qn, vel, omega):
         omega[e, 2] = w2 * inv_h
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _extent(rd, r):
     return rod_extent(r, rd.ri[R_NODE0], rd.ri[R_ELEM0], rd.ri[R_VOR0], rd.ri[R_NE], rd.ri[R_CLOSED])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     """Advance the rods ``isl`` (one, or several in contact with each other) together by
     ``n_steps`` backward-Euler steps of ``dt``; returns the new time.
@@ -378,7 +378,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     return t
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     """The steps of ``advance_island_implicit`` in the work arrays ``work`` it allocated."""
     pairs, plist, pp, ps = pc
@@ -794,7 +794,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     return t
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _predictor_strain(n0, nn, e0, ne, h, pos, xn, vn, dil, rest_len, fixed, max_strain):
     """(code, element) of the predictor's first runaway strain, as ``_check``, leaving out the
     elements next to a prescribed node that did not move as its start velocity says (a clamp
@@ -817,7 +817,7 @@ def _predictor_strain(n0, nn, e0, ne, h, pos, xn, vn, dil, rest_len, fixed, max_
     return OK, -1
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _clamp_reactions(r, tau, n0, e0, c0, c1, f0, f1, pos, Q, rhs, env, dl) -> None:
     """The load of rod ``r`` on its clamps' drivers: the residual (forces minus inertia) of
     the clamped rows, which the prescribed motion takes up."""
@@ -833,7 +833,7 @@ def _clamp_reactions(r, tau, n0, e0, c0, c1, f0, f1, pos, Q, rhs, env, dl) -> No
         add_frame_reaction(r, env.fcon_drv[c], Q, e, rhs[q, 0], rhs[q, 1], rhs[q, 2], env)
 
 
-@njit(cache=True, fastmath={"contract"}, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def advance_rods_implicit(r_begin, r_end, n_steps, t, sim, opts, rd, env, cols, drv, load):
     """Advance rods ``r_begin .. r_end - 1`` (none touching another), each alone and with its
     own copy of the drivers (loaded from ``drv`` first when ``load``); releases the GIL so

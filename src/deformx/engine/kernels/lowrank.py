@@ -25,7 +25,7 @@ from .bundles import E_SEG_A, E_SEG_B
 from .refcount import NO_REFCOUNT
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _corners(p, pairs, seg_a, seg_b, pp):
     """The contact's four nodes and their weights in the relative displacement of its points."""
     i, j = pairs[p, 0], pairs[p, 1]
@@ -33,7 +33,7 @@ def _corners(p, pairs, seg_a, seg_b, pp):
     return (seg_a[i], seg_b[i], seg_a[j], seg_b[j]), (1.0 - s, s, t - 1.0, -t)
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, y, ka, kb):
     """Column c of G (weights ``w`` at ``nodes`` along ``cdir[c]``) dotted with ``y``, which is
     zero outside the blocks of the rods in slots ``ka``, ``kb``."""
@@ -46,7 +46,7 @@ def _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, y, ka, kb):
     return v
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed, act, cdir,
                    ck, csup, Z, S):
     """The active contacts' columns (per pair its normal and, with friction, two tangents:
@@ -109,7 +109,7 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
     return nc
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def lowrank_apply(nc, act, cdir, csup, pairs, rd, pp, node_block, node_rod, boff, fixed, Z, S,
                   u, y) -> None:
     """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y``."""

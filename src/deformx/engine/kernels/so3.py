@@ -16,7 +16,7 @@ _SMALL = 0.05  # rad; below it the truncated series are exact to double precisio
 _R6, _R12, _R20, _R30, _R42, _R56, _R72, _R90 = (1.0 / k for k in (6, 12, 20, 30, 42, 56, 72, 90))
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def rodrigues_coefficients(t2: float) -> tuple[float, float]:
     """(sin(t)/t, (1 - cos t)/t^2) for t^2 = ``t2``, by series below ``_SMALL`` (exact to
     double precision there, and no sqrt, division or sin/cos)."""
@@ -29,7 +29,7 @@ def rodrigues_coefficients(t2: float) -> tuple[float, float]:
     return math.sin(theta) / theta, (1.0 - math.cos(theta)) / t2
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def rotate_directors(Q: np.ndarray, e: int, scale: float, w0: float, w1: float, w2: float) -> None:
     """In place ``Q[e] <- exp(-scale [w]x) Q[e]`` for a material-frame angular velocity ``w``.
 
@@ -60,7 +60,7 @@ def rotate_directors(Q: np.ndarray, e: int, scale: float, w0: float, w1: float, 
         Q[e, 2, j] = r20 * a + r21 * b + r22 * d
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def relative_rotation_vector(Qa: np.ndarray, a: int, Qb: np.ndarray, b: int) -> tuple[float, float, float]:
     """Rotation vector phi (rad, material frame) with ``Qb[b] = exp(-[phi]) Qa[a]``.
 
@@ -89,7 +89,7 @@ def relative_rotation_vector(Qa: np.ndarray, a: int, Qb: np.ndarray, b: int) -> 
     return v0 * mag, v1 * mag, v2 * mag
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def curvature_from_directors(directors: np.ndarray, rest_voronoi: np.ndarray, closed: bool) -> np.ndarray:
     """Discrete curvature/twist (1/m) at the Voronoi domains of one rod, material frame."""
     n = directors.shape[0]

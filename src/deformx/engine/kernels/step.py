@@ -25,7 +25,7 @@ from .implicit import advance_rods_implicit
 from .verlet import OK, advance_rods
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _finish(t, sim, opts, rd, env, cols, drv):
     """Drivers back from the rods' copies and the time into ``sim`` (one group: groups on
     threads leave both to the caller); ``opts[OPT_FLAG]``: the rod that failed first, else -2
@@ -49,7 +49,7 @@ def _finish(t, sim, opts, rd, env, cols, drv):
     return bad != -1
 
 
-@njit(cache=True, fastmath={"contract"}, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` explicit steps of rods that do not touch each other (each on its own, all
     its steps at once); see the module's docstring."""
@@ -63,7 +63,7 @@ def step_verlet(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     return None
 
 
-@njit(cache=True, fastmath={"contract"}, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def step_verlet_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` explicit steps of rods that touch each other (all rods, one step at a
     time); see the module's docstring."""
@@ -79,7 +79,7 @@ def step_verlet_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     return None
 
 
-@njit(cache=True, fastmath={"contract"}, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` stable (backward-Euler) steps of rods that do not touch each other;
     see the module's docstring."""
@@ -93,7 +93,7 @@ def step_stable(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     return None
 
 
-@njit(cache=True, fastmath={"contract"}, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def step_stable_coupled(n_steps, sim, opts, RF, RI, EF, EI, CF, CI, drv, pairs):
     """``n_steps`` stable steps of rods that touch each other; see the module's
     docstring."""
@@ -115,13 +115,13 @@ KERNELS = {("verlet", False): step_verlet, ("verlet", True): step_verlet_coupled
            ("stable", False): step_stable, ("stable", True): step_stable_coupled}
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def collect_drivers(EF, EI, CF, CI, drv, n_rods) -> None:
     """After rods advanced on threads: the drivers back from their copies."""
     store_drivers(drv, carve_env(EF, EI), carve_cols(CF, CI), 0, n_rods)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def advance_drivers(drv, n_steps, dt) -> None:
     """Drivers of a world without rods: the same recursion as inside the rods' steps."""
     for _ in range(n_steps):

@@ -45,7 +45,7 @@ from .so3 import rotate_directors
 OK, NOT_FINITE, RUNAWAY_STRETCH, RUNAWAY_BEND = 0, 1, 2, 3
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h):
     """Positions += h v; directors rotated by h * omega (material frame)."""
     for i in range(n0, n0 + nn):
@@ -55,7 +55,7 @@ def _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h):
         rotate_directors(Q, e, h, omega[e, 0], omega[e, 1], omega[e, 2])
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain):
     """(code, element) of the first NaN or runaway strain in a rod; (OK, -1) if fine."""
     for k in range(ne):
@@ -73,7 +73,7 @@ def _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain):
     return OK, -1
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def advance_rod(r, n_steps, t, sim, rd, env, cols, dl, use_extra, start_mid,
                 end_mid):
     """Advance rod ``r`` by ``n_steps`` steps from time ``t``; returns the new time.
@@ -189,7 +189,7 @@ def advance_rod(r, n_steps, t, sim, rd, env, cols, dl, use_extra, start_mid,
     return t
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _clamp_reactions(r, tau, dt, c0, c1, f0, f1, rd, env, dl) -> None:
     """What the rod puts on its clamps' drivers this step: the total load on each clamped
     node and frame minus the part the clamp's prescribed motion uses up (explicit step:
@@ -217,7 +217,7 @@ def _clamp_reactions(r, tau, dt, c0, c1, f0, f1, rd, env, dl) -> None:
     add_impulse(r, dt, c0, c1, f0, f1, env)
 
 
-@njit(cache=True, fastmath={"contract"}, inline="always", error_model="numpy")
+@njit(cache=True, inline="always", error_model="numpy")
 def _frame_load(Q, e, j, dl, d, omega, J, torque, dil, inv_dt) -> float:
     """Material component j of the torque on clamped element e beyond what its prescribed
     spin uses up."""
@@ -225,7 +225,7 @@ def _frame_load(Q, e, j, dl, d, omega, J, torque, dil, inv_dt) -> float:
     return torque[e, j] - J[e, j] * (w - omega[e, j]) * inv_dt / dil[e]
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _carry_offsets(r, n0, nn, planes, pos, vel, node_radius, pen_off, dt, cols, stats) -> None:
     """Per node, the depth its contact forces leave alone next step: a node found deeper in a
     plane or collider than one step's approach explains (placed inside) keeps that depth,
@@ -253,7 +253,7 @@ def _carry_offsets(r, n0, nn, planes, pos, vel, node_radius, pen_off, dt, cols, 
             pen_off[i] = max(min(pen_off[i], depth) - V_OUT * dt, 0.0)
 
 
-@njit(cache=True, fastmath={"contract"}, error_model="numpy")
+@njit(cache=True, error_model="numpy")
 def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, force, dt,
                     contact_force, pen_off):
     """Add plane contact forces to the rod's nodes (also added to ``contact_force``).
@@ -283,7 +283,7 @@ def _plane_contacts(n0, nn, planes, pos, vel, mass, node_radius, node_kmin, forc
             contact_force[i, 2] += f2
 
 
-@njit(cache=True, fastmath={"contract"}, nogil=True, error_model="numpy")
+@njit(cache=True, nogil=True, error_model="numpy")
 def advance_rods(r_begin, r_end, n_steps, t, sim, rd, env, cols, drv, load):
     """Advance rods ``r_begin .. r_end - 1`` independently (no rod-rod contact), each with its
     own copy of the drivers (loaded from ``drv`` first when ``load``); releases the GIL so
