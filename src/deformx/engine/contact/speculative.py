@@ -301,6 +301,8 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                                + (pa[2] - q[2]) * m[2]) - radius
                         _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c, gap,
                                q, m, 0.0, pose, n_planes)
+        if keep_src[0] < 0 and sp_i[slot, 0, SP_SRC] < 0 and sp_i[slot, 1, SP_SRC] < 0:
+            continue  # empty and staying so (an empty slot's other fields are never read)
         s0 = 0.0
         for j in range(SP_K):
             if keep_src[j] < 0:

@@ -240,23 +240,30 @@ def _assemble(h, ext, rd, nu, kv, geometric, A):
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def _rod_contacts(r, ext, h, rd, planes, cols, commit):
+def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
     """Contact forces of rod ``r``'s slot planes (world planes, meshes, primitives) at the
     iterate into ``force`` and ``contact_force`` (cleared first), their stiffness into
     ``el_K``; ``commit`` (accepted step) stores the friction anchors and reactions. Returns
-    the number of active contacts (it changes when they do)."""
+    the number of active contacts (it changes when they do). ``near``: whether the rod's
+    slots hold a plane this step; without one only ``contact_force`` and the colliders'
+    reactions are cleared (``el_K`` is neither cleared nor added: a rope swinging above the
+    ground walked and cleared every slot and element at every iteration, ~1/3 of its step)."""
     n0, e0, _, ne, nn, _, _ = ext
     contact_force, el_K = rd.n3[N_CONTACT_FORCE], rd.el_K
     for i in range(n0, n0 + nn):
         for d in range(3):
             contact_force[i, d] = 0.0
+    if not near:
+        if cols is not None:
+            for c in range(cols.kind.shape[0]):
+                for j in range(6):
+                    cols.wrench[r, c, j] = 0.0
+        return 0
     for e in range(e0, e0 + ne):
         for q in range(3):
             for i in range(3):
                 for j in range(3):
                     el_K[e, q, i, j] = 0.0
-    if planes.shape[0] == 0 and cols is None:
-        return 0
     # As stiff as the explicit integrator's contact at dt <= 1e-4 s.
     return plane_forces(r, n0, nn, e0, ne, h, min(h, 1e-4), rd.n3[N_POS], rd.n3[N_XN],
                         rd.n3[N_VEL], planes, rd, cols, rd.sp_i, rd.sp_f, commit, rd.stats[r])
@@ -329,7 +336,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     # rod-rod scratch.
     nc = 3 * m  # per pair a normal column and, with friction, two tangent ones
     ints = np.zeros(3 * (K + 1) + SP_K + 2 * n_nodes + 3 * nc, dtype=np.int64)
-    floats = np.zeros(4 * K + 12 * SP_K + 5 * nc)
+    floats = np.zeros(5 * K + 12 * SP_K + 5 * nc)
     # The island's system stacks its rods' block rows; per rod its offsets in the stack.
     boff, noff, eoff = (borrow(ints, 0, (K + 1,)), borrow(ints, K + 1, (K + 1,)),
                         borrow(ints, 2 * K + 2, (K + 1,)))
@@ -340,9 +347,10 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
         eoff[k + 1] = eoff[k] + ne
     nbt = boff[K]
     offs = (boff, noff, eoff)
-    # Per rod: scale, last sub-step, updates (this and the previous iteration).
+    # Per rod: scale, last sub-step, updates (this and the previous iteration), whether its
+    # slots hold a contact plane this step.
     per_rod = (borrow(floats, 0, (K,)), borrow(floats, K, (K,)), borrow(floats, 2 * K, (K,)),
-               borrow(floats, 3 * K, (K,)))
+               borrow(floats, 3 * K, (K,)), borrow(floats, 4 * K, (K,)))
     # Newton matrix, residual, prescribed unknowns; the predictor's h * (last step's
     # acceleration) per node and per element. One rod: its own rows of the packed system
     # (rods on threads never share them); an island (solved one at a time): the first rows.
@@ -356,7 +364,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     system = (rd.sys_A[b0:b0 + nbt], rd.sys_rhs[b0:b0 + nbt], fixed,
               rd.n3[N_ACC][n0:n0 + noff[K]], rd.e3[E_ALPHA][e0:e0 + eoff[K]])
     # Contact planes per slot (see contact/speculative.py): scratch.
-    o, f = 3 * K + 3, 4 * K
+    o, f = 3 * K + 3, 5 * K
     keep = (borrow(ints, o, (SP_K,)), borrow(floats, f, (SP_K,)),
             borrow(floats, f + SP_K, (SP_K, 8)), borrow(floats, f + 9 * SP_K, (SP_K, 3)))
     # Rod-rod contacts: each node's block in the stack and rod slot, the low-rank terms.
@@ -382,7 +390,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
 def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     """The steps of ``advance_island_implicit`` in the work arrays ``work`` it allocated."""
     pairs, plist, pp, ps = pc
-    (boff, noff, eoff), (scale, last_hs, upd, prev_upd), system, keep, lowrank = work
+    (boff, noff, eoff), (scale, last_hs, upd, prev_upd, near), system, keep, lowrank = work
     A, rhs, fixed, acc, alpha = system
     keep_src, keep_f, keep_n, x_start = keep
     node_block, node_rod, Z, S, act, cdir, ck, csup, u = lowrank
@@ -448,14 +456,16 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
         for k in range(K):
             r = isl[k]
             n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
+            near[k] = 0.0
             if sources:
                 if cols is not None:
                     collider_poses(r, elapsed, cols, env.dloc[r])
                 if gather_planes(r, n0, nn, e0, ne, hs, pos, vel, gravity, planes, rd, cols,
                                  rd.sp_i, rd.sp_f, keep_src, keep_f, keep_n, x_start) > 0:
                     touching = True
-                start_penetrations(r, n0, nn, e0, ne, hs, pos, planes, rd, cols, rd.sp_i,
-                                   rd.sp_f, pos.shape[0])
+                    near[k] = 1.0
+                    start_penetrations(r, n0, nn, e0, ne, hs, pos, planes, rd, cols, rd.sp_i,
+                                       rd.sp_f, pos.shape[0])
         for q in range(m):
             pair_plane(plist[q], pairs, rd, pos, xp, hs, rr, pp, ps)
         for k in range(K):
@@ -497,7 +507,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                          env.rod_fcon[r + 1], pos, Q, env, env.dloc[r])
             if cols is not None:
                 collider_poses(r, elapsed + hs, cols, env.dloc[r])
-            if sources:
+            if near[k] != 0.0:
                 project_predictor(r, n0, nn, pos, planes, rd, cols, rd.sp_i, rd.sp_f,
                                   fixed[boff[k]:boff[k + 1]])
         t_new = t + hs
@@ -558,7 +568,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             if any_contact:
                 for k in range(K):
                     active += _rod_contacts(isl[k], _extent(rd, isl[k]), hs, rd, planes, cols,
-                                            False)
+                                            False, near[k] != 0.0)
                 if m > 0:  # after every rod's own contacts: they clear contact_force
                     active += 1000003 * pair_plane_forces(plist, m, pairs, rd, pos, vel, hs,
                                                           min(hs, 1e-4), rr, pp, ps)
@@ -609,7 +619,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 Ak = A[bo:bo + nb]
                 for geometric in (True, False):
                     _assemble(hs, ext, rd, rod_nu[r], 1.0 + rod_tau[r] / hs, geometric, Ak)
-                    if any_contact:
+                    if near[k] != 0.0:
                         _add_element_stiffness(Ak, e0, ne, nn, el_K)
                     for q in range(nb):
                         if fixed[bo + q]:  # prescribed unknowns: identity row and column
@@ -758,7 +768,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
             f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
             if any_contact:
-                _rod_contacts(r, ext, hs, rd, planes, cols, True)
+                _rod_contacts(r, ext, hs, rd, planes, cols, True, near[k] != 0.0)
             if cols is not None:
                 collider_impulses(r, hs, cols, env)
             clamp_rates(elapsed + hs, c0, c1, f0, f1, pos, vel, Q, omega, env, env.dloc[r])
