@@ -499,7 +499,7 @@ class World:
         kernels' flag (see :mod:`.kernels.step`) and leaves the new time unless a rod failed."""
         work = n_steps * int(self._rods_p["ne"].sum())
         args = (*self._bufs, self._drivers.rows, self._pairs)
-        if work >= MIN_THREADED_WORK:
+        if work >= MIN_THREADED_WORK[self.integrator]:
             futures = [pool(len(self._groups)).submit(self._kernel, n_steps, self._sim, opts,
                                                       *args)
                        for opts in self._opts]
