@@ -537,10 +537,12 @@ def start_penetrations(r, n0, nn, e0, ne, h, X, planes, rd, cols, sp_i, sp_f, n_
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> None:
+def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> int:
     """Move predicted node positions ``X`` that penetrate their contact planes back onto them
     (a Newton starting guess that already respects the contacts; ``fixed`` marks the
-    prescribed unknowns, node i's at 2 (i - n0), which stay where they are)."""
+    prescribed unknowns, node i's at 2 (i - n0), which stay where they are); returns how many
+    of them started the step outside (contacts about to engage)."""
+    moved = 0
     node_radius = rd.n1[N_NODE_RADIUS]
     n_planes = planes.shape[0]
     pose = rd.e33[0]  # as in plane_forces
@@ -556,10 +558,14 @@ def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> None
             q, n = _plane_of(sp_f, i, j, src, n_planes, pose)
             pen = node_radius[i] - ((X[i, 0] - q[0]) * n[0] + (X[i, 1] - q[1]) * n[1]
                                     + (X[i, 2] - q[2]) * n[2])
-            pen -= max(sp_f[i, j, SP_D0], 0.0)  # no deeper than it started
+            d0 = sp_f[i, j, SP_D0]
+            pen -= max(d0, 0.0)  # no deeper than it started
             if pen > 0.0:
+                if d0 <= 0.0:  # a contact about to engage (not one resting since before)
+                    moved += 1
                 for d in range(3):
                     X[i, d] += pen * n[d]
+    return moved
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)

@@ -36,7 +36,7 @@ from .banded import BLOCK_BAND
 # State rows come first in each stack: positions, velocities, frames, angular velocities;
 # the stable integrator's step start, predictor rates, viscous loads, contact planes and
 # friction anchors, rod-rod contact offsets, the explicit integrator's start-inside offsets,
-# last step and contraction rate; the rod-rod
+# last step, contraction rate and contact count; the rod-rod
 # Verlet list's reference positions and (pairs, valid, builds, touching).
 ROD_ARRAYS = (
     ('n3', 'f', (12, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'ref', 'fext', 'force',
@@ -48,7 +48,7 @@ ROD_ARRAYS = (
     ('n1', 'f', (4, 'N'), ('pen_off', 'mass', 'node_radius', 'node_kmin'), 1),
     ('e1', 'f', (5, 'E'), ('pair_off', 'rest_len', 'seg_radius', 'dil', 'scr_edot'), 1),
     ('v1', 'f', (1, 'V'), ('rest_vor',), 0),
-    ('r1', 'f', (6, 'R'), ('h_prev', 'rate', 'decay', 'nu', 'tau', 'times'), 2),
+    ('r1', 'f', (7, 'R'), ('h_prev', 'rate', 'contacts', 'decay', 'nu', 'tau', 'times'), 3),
     # The stable integrator's contact planes per query slot (see contact/speculative.py).
     ('sp_i', 'i', ('Q', 2, 5), None, 1),
     ('ei', 'i', (7, 'E'), ('seg_a', 'seg_b', 'seg_rod', 'seg_k', 'seg_ne', 'seg_closed',
@@ -78,7 +78,7 @@ V_B, V_REST_KAPPA, V_KAPPA, V_COUPLE, V_SCR_C, V_SCR_X = 0, 1, 2, 3, 4, 5
 N_PEN_OFF, N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2, 3
 E_PAIR_OFF, E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3, 4
 V_REST_VOR = 0
-R_H_PREV, R_RATE, R_DECAY, R_NU, R_TAU, R_TIMES = 0, 1, 2, 3, 4, 5
+R_H_PREV, R_RATE, R_CONTACTS, R_DECAY, R_NU, R_TAU, R_TIMES = 0, 1, 2, 3, 4, 5, 6
 E_SEG_A, E_SEG_B, E_SEG_ROD, E_SEG_K, E_SEG_NE, E_SEG_CLOSED, E_EXCLUDED = 0, 1, 2, 3, 4, 5, 6
 R_NODE0, R_ELEM0, R_VOR0, R_NE, R_CLOSED, R_GROUP = 0, 1, 2, 3, 4, 5
 ENV = (

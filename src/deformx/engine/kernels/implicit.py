@@ -42,7 +42,7 @@ from .bundles import (
     E_DIL, E_J, E_OMEGA, E_PAIR_OFF, E_Q, E_QN, E_REST_LEN, E_S, E_STRESS, E_TEXT, E_TN_EL,
     E_ALPHA, E_TORQUE, E_WN, N_ACC, N_CONTACT_FORCE,
     N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VEL, N_VN, N_XN, N_XP,
-    OPT_ITER, R_CLOSED, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU, R_TIMES, R_VOR0,
+    OPT_ITER, R_CLOSED, R_CONTACTS, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU, R_TIMES, R_VOR0,
     SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_RR, SIM_TOL, V_B, V_KAPPA, V_REST_VOR,
 )
 from .drivers import (
@@ -336,7 +336,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     # rod-rod scratch.
     nc = 3 * m  # per pair a normal column and, with friction, two tangent ones
     ints = np.zeros(3 * (K + 1) + SP_K + 2 * n_nodes + 3 * nc, dtype=np.int64)
-    floats = np.zeros(5 * K + 12 * SP_K + 5 * nc)
+    floats = np.zeros(6 * K + 12 * SP_K + 5 * nc)
     # The island's system stacks its rods' block rows; per rod its offsets in the stack.
     boff, noff, eoff = (borrow(ints, 0, (K + 1,)), borrow(ints, K + 1, (K + 1,)),
                         borrow(ints, 2 * K + 2, (K + 1,)))
@@ -348,9 +348,10 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     nbt = boff[K]
     offs = (boff, noff, eoff)
     # Per rod: scale, last sub-step, updates (this and the previous iteration), whether its
-    # slots hold a contact plane this step.
+    # slots hold a contact plane this step, whether its contacts are calm (see below).
     per_rod = (borrow(floats, 0, (K,)), borrow(floats, K, (K,)), borrow(floats, 2 * K, (K,)),
-               borrow(floats, 3 * K, (K,)), borrow(floats, 4 * K, (K,)))
+               borrow(floats, 3 * K, (K,)), borrow(floats, 4 * K, (K,)),
+               borrow(floats, 5 * K, (K,)))
     # Newton matrix, residual, prescribed unknowns; the predictor's h * (last step's
     # acceleration) per node and per element. One rod: its own rows of the packed system
     # (rods on threads never share them); an island (solved one at a time): the first rows.
@@ -364,7 +365,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     system = (rd.sys_A[b0:b0 + nbt], rd.sys_rhs[b0:b0 + nbt], fixed,
               rd.n3[N_ACC][n0:n0 + noff[K]], rd.e3[E_ALPHA][e0:e0 + eoff[K]])
     # Contact planes per slot (see contact/speculative.py): scratch.
-    o, f = 3 * K + 3, 5 * K
+    o, f = 3 * K + 3, 6 * K
     keep = (borrow(ints, o, (SP_K,)), borrow(floats, f, (SP_K,)),
             borrow(floats, f + SP_K, (SP_K, 8)), borrow(floats, f + 9 * SP_K, (SP_K, 3)))
     # Rod-rod contacts: each node's block in the stack and rod slot, the low-rank terms.
@@ -390,7 +391,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
 def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     """The steps of ``advance_island_implicit`` in the work arrays ``work`` it allocated."""
     pairs, plist, pp, ps = pc
-    (boff, noff, eoff), (scale, last_hs, upd, prev_upd, near), system, keep, lowrank = work
+    (boff, noff, eoff), (scale, last_hs, upd, prev_upd, near, calm), system, keep, lowrank = work
     A, rhs, fixed, acc, alpha = system
     keep_src, keep_f, keep_n, x_start = keep
     node_block, node_rod, Z, S, act, cdir, ck, csup, u = lowrank
@@ -507,9 +508,15 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                          env.rod_fcon[r + 1], pos, Q, env, env.dloc[r])
             if cols is not None:
                 collider_poses(r, elapsed + hs, cols, env.dloc[r])
+            # Calm: no contact about to engage (nothing projected) after a step of this size;
+            # with the same contact count at the first iterate as at the last step's end, its
+            # contacts neither switch on nor off, and it may stop after one iteration as a rod
+            # in free flight does.
+            calm[k] = 1.0 if last_hs[k] == hs else 0.0
             if near[k] != 0.0:
-                project_predictor(r, n0, nn, pos, planes, rd, cols, rd.sp_i, rd.sp_f,
-                                  fixed[boff[k]:boff[k + 1]])
+                if project_predictor(r, n0, nn, pos, planes, rd, cols, rd.sp_i, rd.sp_f,
+                                     fixed[boff[k]:boff[k + 1]]) > 0:
+                    calm[k] = 0.0
         t_new = t + hs
         inv_hs = 1.0 / hs  # the per-node and per-element loops multiply
         set_rounds = 0
@@ -567,8 +574,11 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             active = 0
             if any_contact:
                 for k in range(K):
-                    active += _rod_contacts(isl[k], _extent(rd, isl[k]), hs, rd, planes, cols,
-                                            False, near[k] != 0.0)
+                    on = _rod_contacts(isl[k], _extent(rd, isl[k]), hs, rd, planes, cols,
+                                       False, near[k] != 0.0)
+                    if it == 1 and on != rd.r1[R_CONTACTS][isl[k]]:
+                        calm[k] = 0.0
+                    active += on
                 if m > 0:  # after every rod's own contacts: they clear contact_force
                     active += 1000003 * pair_plane_forces(plist, m, pairs, rd, pos, vel, hs,
                                                           min(hs, 1e-4), rr, pp, ps)
@@ -693,12 +703,13 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             # contraction rate measured on this and earlier steps (CVODE's test), so smooth
             # steps can stop after one iteration. Not near a contact, whose force switches on
             # within the step.
-            early = it == 1 and not touching
+            early = it == 1 and (not touching or m == 0)
             for k in range(K):
                 r = isl[k]
                 if it >= 2 and prev_upd[k] > 0.0 and previous > 0.0 and previous < math.inf:
                     rate[r] = max(0.3 * rate[r], upd[k] / prev_upd[k])
-                early = early and upd[k] <= EARLY_LIMIT * tol and rate[r] * upd[k] <= tol
+                early = (early and upd[k] <= EARLY_LIMIT * tol and rate[r] * upd[k] <= tol
+                         and (calm[k] != 0.0 or not touching))
             if (it == budget and update <= EXTEND_RATE * previous and previous < math.inf
                     and it < (round_start if m > 0 else 0) + EXTEND * max_iter):
                 budget += 1  # still contracting: a few more iterations cost less than halving
@@ -767,8 +778,10 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             n0, e0, v0, ne, nn, nv, closed = ext
             c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
             f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
+            rd.r1[R_CONTACTS][r] = 0.0
             if any_contact:
-                _rod_contacts(r, ext, hs, rd, planes, cols, True, near[k] != 0.0)
+                rd.r1[R_CONTACTS][r] = _rod_contacts(r, ext, hs, rd, planes, cols, True,
+                                                     near[k] != 0.0)
             if cols is not None:
                 collider_impulses(r, hs, cols, env)
             clamp_rates(elapsed + hs, c0, c1, f0, f1, pos, vel, Q, omega, env, env.dloc[r])
