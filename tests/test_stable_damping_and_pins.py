@@ -59,6 +59,41 @@ def test_internal_damping_needs_the_stable_integrator():
         world.step(1)
 
 
+def test_internal_damping_set_later_in_an_explicit_world_is_refused():
+    world = dx.World(integrator="verlet")
+    rods = [world.add_rod(dx.Rod.straight(n_elements=5, start=(0, k, 0))) for k in range(3)]
+    world.step(1)
+    with pytest.raises(ValueError, match="rod 1 sets it"):
+        rods[1].internal_damping = 0.01
+
+
+@pytest.mark.parametrize("integrator,dt", [("stable", 2e-3), ("verlet", 1e-4)])
+def test_changing_one_rods_damping_matches_a_world_built_with_it(integrator, dt):
+    """A rod's damping set in place (a batch redraws it at each reset of one environment)
+    changes that rod alone, exactly as if the world had been built with it."""
+    def world(dampings):
+        w = dx.World(dt=dt, integrator=integrator, rod_contact=False)
+        rods = [w.add_rod(dx.Rod.straight(n_elements=10, start=(0, 0.1 * k, 1), length=0.3,
+                                          radius=0.005, density=1000.0, youngs_modulus=1e6,
+                                          damping=d)) for k, d in enumerate(dampings)]
+        for rod in rods:
+            rod.fix_start()
+        return w, rods
+
+    changed, changed_rods = world([0.5, 0.5, 0.5])
+    changed.run(0.05)
+    changed_rods[1].damping = 4.0
+    built, built_rods = world([0.5, 4.0, 0.5])
+    built.step(1)  # packed, then given the other world's state
+    built.set_state(changed.get_state())
+    for w in (built, changed):
+        w.run(0.05)
+    for a, b in zip(built_rods, changed_rods):
+        np.testing.assert_array_equal(a.positions, b.positions)
+    shifted = changed_rods[1].positions - [0.0, 0.1, 0.0]
+    assert np.abs(changed_rods[0].positions - shifted).max() > 1e-6  # the damping mattered
+
+
 def _pendulum(integrator: str, dt: float):
     rod = dx.Rod.straight(n_elements=20, start=(0, 0, 1), direction=(1, 0, 0), normal=(0, 0, 1),
                           length=0.4, radius=0.005, density=1000.0, youngs_modulus=1e7,

@@ -113,10 +113,16 @@ def bind_rod(b: Packed, rod, i: int) -> None:
 
 
 def set_damping(b: Packed, rods: Sequence, dt: float) -> None:
-    """Per-rod damping: the explicit step's decay factor, the rate and retardation time."""
-    b["decay"][:] = [math.exp(-r.damping * dt) for r in rods]
-    b["nu"][:] = [r.damping for r in rods]
-    b["tau"][:] = [r.internal_damping for r in rods]
+    """Per-rod damping of every rod (see ``write_damping``)."""
+    for i, rod in enumerate(rods):
+        write_damping(b, rod, i, dt)
+
+
+def write_damping(b: Packed, rod, i: int, dt: float) -> None:
+    """Rod ``i``'s damping: the explicit step's decay factor, the rate and retardation time."""
+    b["decay"][i] = math.exp(-rod.damping * dt)
+    b["nu"][i] = rod.damping
+    b["tau"][i] = rod.internal_damping
 
 
 def _segments(b: Packed, rod, i: int, n0: int, e0: int) -> None:

@@ -233,7 +233,7 @@ class Rod:
     def damping(self, value: float) -> None:
         self._damping = check.non_negative("damping", value, "1/s")
         if self._world is not None:
-            self._world._rod_parameters_changed()
+            self._world._rod_parameters_changed(self)
 
     @property
     def internal_damping(self) -> float:
@@ -249,7 +249,7 @@ class Rod:
     def internal_damping(self, value: float) -> None:
         self._internal_damping = check.non_negative("internal_damping", value, "s")
         if self._world is not None:
-            self._world._rod_parameters_changed()
+            self._world._rod_parameters_changed(self)
 
     @property
     def contact_group(self) -> int:
@@ -263,7 +263,7 @@ class Rod:
             raise ValueError(f"contact_group must be an integer, got {value!r}")
         self._group = int(value)
         if self._world is not None:
-            self._world._rod_parameters_changed()
+            self._world._rod_parameters_changed(self)
 
     def ignore(self, *colliders) -> None:
         """Never touch these colliders (e.g. the gripper geom this rod is attached to)."""

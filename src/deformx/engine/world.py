@@ -22,7 +22,7 @@ from .kernels import implicit, step, verlet
 from .kernels.bundles import (OPT_FLAG, SIM_DT, SIM_G, SIM_LEN, SIM_MAX_STRAIN, SIM_RR, SIM_SKIN,
                               SIM_T, SIM_TOL)
 from .kernels.step import advance_drivers, compiled_entry
-from .model import bind_rod, pack_rods, set_damping, write_material
+from .model import bind_rod, pack_rods, set_damping, write_damping, write_material
 from .packing import Packed
 from .rod import Rod
 from .state import WorldState, put_rod, rod_slices, take_rod
@@ -330,24 +330,26 @@ class World:
         self._drivers.reset_impulses(self._drivers.index(drivers))
 
     # ------------------------------------------------------------------ preparing
-    def _rod_parameters_changed(self) -> None:
-        """Damping or contact group of a rod changed: rewrite them in place."""
-        if self._rods_p is not None:
-            set_damping(self._rods_p, self._rods, self._dt)
-            self._rods_p["group"][:] = [r.contact_group for r in self._rods]
-            self._check_damping()
+    def _rod_parameters_changed(self, rod: Rod) -> None:
+        """A rod's damping or contact group changed: rewrite its entries in place (O(1): a
+        batch of environments redraws one rope's damping at each of its resets)."""
+        if self._rods_p is not None and not self._stale_rods:
+            self._check_damping([rod])
+            write_damping(self._rods_p, rod, rod._index, self._dt)
+            self._rods_p["group"][rod._index] = rod.contact_group
 
     def _rod_material_changed(self, rod: Rod) -> None:
         """A rod's masses, inertia or stiffness changed: rewrite its slices in place."""
         if self._rods_p is not None and not self._stale_rods:
             write_material(self._rods_p, rod, rod._index)
 
-    def _check_damping(self) -> None:
+    def _check_damping(self, rods: Sequence[Rod] | None = None) -> None:
         if self.integrator == "verlet":
-            viscous = [i for i, r in enumerate(self._rods) if r.internal_damping > 0.0]
+            viscous = [r for r in (self._rods if rods is None else rods)
+                       if r.internal_damping > 0.0]
             if viscous:
-                raise ValueError(f"internal_damping: rod {viscous[0]} sets it, but it needs "
-                                 "integrator='stable' (explicit steps cannot afford it)")
+                raise ValueError(f"internal_damping: rod {viscous[0]._index} sets it, but it "
+                                 "needs integrator='stable' (explicit steps cannot afford it)")
 
     def _prepare(self) -> None:
         """Rebuild the buffers after rods, clamps, planes, colliders or dt changed."""
