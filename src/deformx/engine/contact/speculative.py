@@ -375,11 +375,8 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
     # Collider tables; without colliders arrays of the same types that are never read.
     pose, twist, par = rd.e33[0], rd.n3[0], planes
     has_cols = cols is not None
-    if has_cols:
+    if has_cols:  # (the caller clears the reactions in cols.wrench[r])
         pose, twist, par = cols.pose[r], cols.twist[r], cols.par
-        for c in range(cols.kind.shape[0]):
-            for j in range(6):
-                cols.wrench[r, c, j] = 0.0
     count = 0
     for k in range(_n_queries(nn, ne, cols)):
         node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)

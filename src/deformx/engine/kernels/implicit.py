@@ -42,7 +42,8 @@ from .bundles import (
     E_DIL, E_J, E_OMEGA, E_PAIR_OFF, E_Q, E_QN, E_REST_LEN, E_S, E_STRESS, E_TEXT, E_TN_EL,
     E_ALPHA, E_TORQUE, E_WN, N_ACC, N_CONTACT_FORCE,
     N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VEL, N_VN, N_XN, N_XP,
-    OPT_ITER, R_CLOSED, R_CONTACTS, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU, R_TIMES, R_VOR0,
+    OPT_ITER, R_CLOSED, R_CONTACTS, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU,
+    R_TIMES, R_VOR0,
     SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_RR, SIM_TOL, V_B, V_KAPPA, V_REST_VOR,
 )
 from .drivers import (
@@ -253,11 +254,11 @@ def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
     for i in range(n0, n0 + nn):
         for d in range(3):
             contact_force[i, d] = 0.0
+    if cols is not None:  # the colliders' reactions on this rod (plane_forces adds them)
+        for c in range(cols.kind.shape[0]):
+            for j in range(6):
+                cols.wrench[r, c, j] = 0.0
     if not near:
-        if cols is not None:
-            for c in range(cols.kind.shape[0]):
-                for j in range(6):
-                    cols.wrench[r, c, j] = 0.0
         return 0
     for e in range(e0, e0 + ne):
         for q in range(3):
@@ -701,9 +702,10 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     omega[e, 2] = w2 * inv_hs
             # Convergence: what is left after this update is about rate * update, with the
             # contraction rate measured on this and earlier steps (CVODE's test), so smooth
-            # steps can stop after one iteration. Not near a contact, whose force switches on
-            # within the step.
-            early = it == 1 and (not touching or m == 0)
+            # steps can stop after one iteration. Not in rod-rod contact, nor near a contact
+            # plane unless the rod's contacts are calm (a force switching on within the step
+            # needs another iteration).
+            early = it == 1 and m == 0
             for k in range(K):
                 r = isl[k]
                 if it >= 2 and prev_upd[k] > 0.0 and previous > 0.0 and previous < math.inf:
