@@ -1,6 +1,6 @@
 """Hit-target environment (deformx.learn): environment steps per second of one environment,
 per rope model, with the same random actions; and how many random-action episodes end in a
-divergence of the rope (a fold of more than 170 deg between neighbouring elements).
+divergence of the rope (NaN or runaway stretch; the stable integrator steps through folds).
 
     python benchmarks/bench_hit_target.py                 # 3 interleaved rounds of 300 steps
     python benchmarks/bench_hit_target.py --steps 700 --rounds 1

@@ -6,7 +6,7 @@ environment a batch of ``num_envs``.
 
 Per-environment resets restore that copy's settled state: its arm's joints (and capsule
 chain) in MuJoCo and its rope through the engine's per-rod state. A rope that diverges during
-a step (a fold of more than 170 deg, see ``docs/learning.md``) is reset while the others
+a step (NaN or runaway stretch; folds are stepped through, see ``docs/learning.md``) is reset while the others
 finish the step (``World.step(on_diverged="report")``; where ropes may touch each other, the
 whole step is rolled back and run again without it), and that copy's episode is cut short -
 truncated, not terminated: the simulator could not go on, the task did not end, so a learner

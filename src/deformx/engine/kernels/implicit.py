@@ -551,7 +551,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
                 rod_internal_loads(r, rd)
                 failed, fail_at = _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque,
-                                         max_strain if it > 1 else math.inf)
+                                         max_strain if it > 1 else math.inf, math.inf)
                 if failed == OK and it == 1:
                     failed, fail_at = _predictor_strain(n0, nn, e0, ne, hs, pos, xn, vn, dil,
                                                         rest_len, fixed[boff[k]:boff[k + 1]],

@@ -43,6 +43,12 @@ from .so3 import rotate_directors
 
 # Divergence codes returned in status[r, 0].
 OK, NOT_FINITE, RUNAWAY_STRETCH, RUNAWAY_BEND = 0, 1, 2, 3
+# Explicit steps stop when neighbouring frames turn by more than 3 rad (~172 deg): near the log
+# map's half-turn cut the couple flips direction within a step, and at explicit step sizes that
+# is where a blow-up shows first. The stable integrator steps through such a fold (a whipped
+# soft rope doubles back over one node; its energy is continuous across the cut): only NaN stops
+# it there.
+FOLD_TURN2 = 9.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -56,8 +62,11 @@ def _kinematic(n0, nn, e0, ne, pos, vel, Q, omega, h):
 
 
 @njit(cache=True, error_model="numpy")
-def _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain):
-    """(code, element) of the first NaN or runaway strain in a rod; (OK, -1) if fine."""
+def _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain, max_turn2=FOLD_TURN2):
+    """(code, element) of the first NaN or runaway strain in a rod; (OK, -1) if fine.
+
+    ``max_turn2``: square of the largest rotation (rad^2) between neighbouring frames; the
+    stable integrator passes inf (it steps through a fold, see ``FOLD_TURN2``)."""
     for k in range(ne):
         d = dil[e0 + k]
         t = torque[e0 + k, 0] + torque[e0 + k, 1] + torque[e0 + k, 2]
@@ -68,7 +77,7 @@ def _check(e0, ne, v0, nv, dil, kappa, rest_vor, torque, max_strain):
     for j in range(nv):
         vj = v0 + j
         ang2 = (kappa[vj, 0] ** 2 + kappa[vj, 1] ** 2 + kappa[vj, 2] ** 2) * rest_vor[vj] ** 2
-        if not (ang2 < 9.0):  # neighbouring frames turned by > ~170 degrees (or NaN)
+        if not (ang2 < max_turn2):  # neighbouring frames turned too far (or NaN)
             return (RUNAWAY_BEND if ang2 == ang2 else NOT_FINITE), j
     return OK, -1
 
