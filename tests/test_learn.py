@@ -311,6 +311,34 @@ def test_ppo_improves_the_return_resumes_and_its_trajectory_replays(tmp_path):
     assert targets.shape[1] == 6 and np.allclose(np.diff(times), 2e-3)
     d = replay(targets, HitTargetConfig(**task), n=2)
     assert d == pytest.approx([summary["d_min"]] * 2, abs=1e-6)
+    assert summary["d_min"] <= summary["d_min_deterministic"] + 1e-9  # best of the rollouts
+
+
+def test_sampled_rollouts_are_the_policys_own_episodes_and_play_back_exactly():
+    """The trajectories a trained policy generates (train's export): the noiseless rollout
+    of a batch is the single environment's rollout of the same policy; noise gives other
+    episodes; each recorded action sequence, played back in a fresh environment, gives its
+    d_min again (what the exported CSV then replays open loop)."""
+    from deformx.learn.train import _playback, rollout, sample_rollouts
+
+    cfg = HitTargetConfig(target=(0.0, 1.0, 0.6), settle_time=0.2, episode_steps=100)
+
+    def policy(obs):  # a smooth feedback law of the observation (no learning needed here)
+        obs = np.atleast_2d(obs)
+        return np.tanh(obs[:, 3:6] + 0.5 * obs[:, 8:9])
+
+    quiet = sample_rollouts(policy, cfg, n=3, std=0.0)
+    single = rollout(lambda o: policy(o)[0], cfg)
+    assert quiet["d_min"] == pytest.approx([single["d_min"]] * 3, abs=1e-9)
+    noisy = sample_rollouts(policy, cfg, n=4, std=0.7, seed=3)
+    assert noisy["d_min"][0] == pytest.approx(single["d_min"], abs=1e-9)
+    assert np.ptp(noisy["d_min"]) > 5e-3  # the noise makes other episodes
+    assert list(noisy["steps"]) == [len(a) for a in noisy["actions"]]
+    for k in (1, 3):
+        again = rollout(_playback(noisy["actions"][k]), cfg)
+        assert again["d_min"] == pytest.approx(noisy["d_min"][k], abs=1e-9)
+    with pytest.raises(ValueError, match="n must be"):
+        sample_rollouts(policy, cfg, n=0)
 
 
 def test_train_command_writes_a_run_directory(tmp_path):

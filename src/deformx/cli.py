@@ -447,6 +447,7 @@ def train(
     video: bool = typer.Option(True, "--video/--no-video", help="Write best_rollout.mp4."),
     normalize: bool = typer.Option(False, "--normalize", help="Normalise observations and rewards (SB3's VecNormalize)."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
+    rollouts: int = typer.Option(64, "--rollouts", min=1, help="Trajectories the trained policy generates (the deterministic one and the rest with its exploration noise); the best is exported."),
 ) -> None:
     """Train PPO (stable-baselines3) on a task; resumable. Writes checkpoints, episodes.csv,
     TensorBoard logs (tb/), learning_curve.png, best_rollout.csv (the joint commands a UR5e
@@ -465,7 +466,7 @@ def train(
         overrides["rope_dt"] = rope_dt
     try:
         settings = TrainSettings(total_steps=steps, num_envs=envs, seed=seed, video=video,
-                                 normalize=normalize, task=overrides)
+                                 normalize=normalize, rollouts=rollouts, task=overrides)
         from .learn.task import HitTargetConfig
 
         HitTargetConfig(**overrides)  # bad task numbers fail here, before any work
@@ -474,8 +475,10 @@ def train(
     t0 = time.perf_counter()
     summary = run_training(out, settings, resume=resume, progress=progress)
     console.print(f"[bold]DeformX train {task}[/bold]: {summary['timesteps']} environment steps "
-                  f"in {time.perf_counter() - t0:.1f} s; deterministic rollout d_min "
-                  f"{100 * summary['d_min']:.1f} cm (3D {100 * summary['d_min_3d']:.1f} cm)")
+                  f"in {time.perf_counter() - t0:.1f} s; best of {summary['rollouts']} "
+                  f"rollouts d_min {100 * summary['d_min']:.1f} cm (3D "
+                  f"{100 * summary['d_min_3d']:.1f} cm; deterministic "
+                  f"{100 * summary['d_min_deterministic']:.1f} cm)")
     console.print(f"outputs in {escape(str(out))}: policy.zip, checkpoints/, episodes.csv, tb/, "
                   "learning_curve.png, best_rollout.csv/.mp4, summary.json")
 

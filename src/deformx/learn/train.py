@@ -1,6 +1,9 @@
 """PPO on the hit-target task (stable-baselines3, extra ``[learn]``), resumable, and what a
-trained policy is judged by: its deterministic rollout's ``d_min``, the joint-command
-trajectory a real UR5e replays open loop (CSV at the control rate), and that replay.
+trained policy is judged by: the joint-command trajectories it generates in simulation (its
+deterministic rollout and ``rollouts - 1`` more with its own exploration noise, as the paper
+"first uses the trained policy to generate successful joint-command trajectories"), the best
+one's ``d_min``, that trajectory as a CSV a real UR5e replays open loop (control rate), and
+that replay.
 
 The authors' PPO (their own implementation) and SB3's nearest settings:
 
@@ -54,11 +57,13 @@ class TrainSettings:
     checkpoint_every: int = 20_000           # environment steps
     video: bool = True
     normalize: bool = False                  # observations and rewards by SB3's VecNormalize
+    rollouts: int = 64                       # policy rollouts drawn after training (1: the
+                                             # deterministic one only); the best is exported
     task: dict = field(default_factory=dict)  # HitTargetConfig overrides (target, rope, ...)
 
     def __post_init__(self) -> None:
         for name in ("total_steps", "num_envs", "rollout", "epochs", "checkpoint_every",
-                     "minibatches"):
+                     "minibatches", "rollouts"):
             v = getattr(self, name)
             if not isinstance(v, (int, np.integer)) or v < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
@@ -192,16 +197,29 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
         save_checkpoint(model, out)
     model.save(out / "policy.zip")
     norm = model.get_vec_normalize_env()
-    policy = model
     if norm is not None:
         norm.save(out / "vecnormalize.pkl")
-        policy = lambda o: model.predict(norm.normalize_obs(o), deterministic=True)[0]  # noqa: E731
     venv.close()
-    result = rollout(policy, config, video=out / "best_rollout.mp4" if settings.video else None)
+
+    def mean_action(obs: np.ndarray) -> np.ndarray:
+        return model.predict(norm.normalize_obs(obs) if norm is not None else obs,
+                             deterministic=True)[0]
+
+    # As the paper deploys it: the trained policy generates joint-command trajectories in
+    # simulation (its own exploration noise), and the best one is replayed open loop.
+    samples = sample_rollouts(mean_action, config, n=settings.rollouts, std=settings.std,
+                              seed=settings.seed)
+    best = int(np.argmin(samples["d_min"]))
+    result = rollout(_playback(samples["actions"][best]), config,
+                     video=out / "best_rollout.mp4" if settings.video else None)
     export_trajectory(out / "best_rollout.csv", result["times"], result["joint_targets"])
     curve = plot_learning_curve(out / "episodes.csv", out / "learning_curve.png")
     summary = {"timesteps": int(model.num_timesteps), "d_min": result["d_min"],
                "d_min_3d": result["d_min_3d"], "success": result["success"],
+               "rollouts": settings.rollouts, "best_rollout": best,
+               "d_min_deterministic": float(samples["d_min"][0]),
+               "d_min_sampled_median": float(np.median(samples["d_min"])),
+               "successes_sampled": int(samples["success"].sum()),
                "learning_curve": str(curve) if curve else None}
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     return summary
@@ -235,6 +253,53 @@ def rollout(policy, config: HitTargetConfig, video: str | Path | None = None,
     times = config.control_dt * np.arange(1, len(targets) + 1)
     return {"d_min": info["d_min"], "d_min_3d": info["d_min_3d"], "success": info["success"],
             "times": times, "joint_targets": np.array(targets)}
+
+
+def sample_rollouts(policy, config: HitTargetConfig, n: int = 64, std: float = 0.0,
+                    seed: int = 0) -> dict:
+    """``n`` episodes of ``policy`` (a callable: observations (n, 18) -> mean actions) stepped
+    together in one batch: rollout 0 takes the mean actions, the others the mean plus
+    Gaussian noise of ``std`` (the policy's exploration; seeded by ``seed``), clipped to
+    [-1, 1]. Returns per rollout ``d_min``, ``d_min_3d`` (m), ``success``, ``steps`` and
+    ``actions`` (a list of (steps, 3) arrays, each up to its episode's end)."""
+    from .batch import HitTargetBatch
+
+    if not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n must be an integer >= 1, got {n!r}")
+    if not std >= 0.0:
+        raise ValueError(f"std must be >= 0, got {std!r}")
+    rng = np.random.default_rng(seed)
+    batch = HitTargetBatch(config, n)
+    for i in range(n):
+        batch.reset(i)
+    live = np.ones(n, dtype=bool)
+    d_min, d_min_3d = batch.d_min.copy(), batch.d_min_3d.copy()
+    success = np.zeros(n, dtype=bool)
+    actions: list[list[np.ndarray]] = [[] for _ in range(n)]
+    for _ in range(config.episode_steps):
+        a = np.asarray(policy(batch.observations()), dtype=np.float64).reshape(n, -1)
+        noise = rng.standard_normal(a.shape)
+        noise[0] = 0.0
+        a = np.clip(a + std * noise, -1.0, 1.0)
+        _, terminated, truncated, won, diverged = batch.step(a)
+        for i in np.flatnonzero(live):
+            actions[i].append(a[i])
+        ok = live & ~diverged  # a diverged copy was put back: its last values stand
+        d_min = np.where(ok, batch.d_min, d_min)
+        d_min_3d = np.where(ok, batch.d_min_3d, d_min_3d)
+        success |= live & won
+        live &= ~(terminated | truncated)
+        if not live.any():
+            break
+    return {"d_min": d_min, "d_min_3d": d_min_3d, "success": success,
+            "steps": np.array([len(x) for x in actions]),
+            "actions": [np.array(x).reshape(-1, a.shape[1]) for x in actions]}
+
+
+def _playback(actions: np.ndarray):
+    """A policy that plays ``actions`` back in order (then zeros: the commands hold)."""
+    it = iter(np.asarray(actions))
+    return lambda obs: next(it, np.zeros(np.asarray(actions).shape[1]))
 
 
 def export_trajectory(path: str | Path, times: np.ndarray, joint_targets: np.ndarray) -> Path:
