@@ -329,7 +329,8 @@ def replay(joint_targets: np.ndarray, config: HitTargetConfig, n: int = 1,
            perturb: dict | None = None, seed: int = 0) -> np.ndarray:
     """Replay a joint-command trajectory open loop ``n`` times (``perturb``: rope parameter
     fractions drawn per replay, e.g. ``{"youngs_modulus": 0.1}``); returns each replay's
-    in-plane ``d_min`` (m)."""
+    in-plane ``d_min`` (m), inf for a replay whose rope diverged (the simulator stopped:
+    no distance to report)."""
     from dataclasses import replace
 
     from .batch import HitTargetBatch, with_params
@@ -340,11 +341,13 @@ def replay(joint_targets: np.ndarray, config: HitTargetConfig, n: int = 1,
     params = [with_params(cfg, rng) for _ in range(n)]
     batch = HitTargetBatch(cfg, n, params=params)
     d_min = np.full(n, np.inf)
+    failed = np.zeros(n, dtype=bool)
     for q in np.asarray(joint_targets, dtype=np.float64):
         batch.q_cmd[:] = q  # the trajectory itself; actions of zero leave it as it is
         _, terminated, _, _, diverged = batch.step(np.zeros((n, len(cfg.active_joints))))
-        d_min = np.minimum(d_min, np.where(diverged, np.inf, batch.d))
-    return d_min
+        failed |= diverged
+        d_min = np.minimum(d_min, batch.d)
+    return np.where(failed, np.inf, d_min)
 
 
 def plot_learning_curve(episodes_csv: str | Path, png: str | Path) -> Path | None:
