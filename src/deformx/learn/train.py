@@ -209,7 +209,7 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
     # simulation (its own exploration noise), and the best one is replayed open loop.
     samples = sample_rollouts(mean_action, config, n=settings.rollouts, std=settings.std,
                               seed=settings.seed)
-    best = int(np.argmin(samples["d_min"]))
+    best = int(np.argmin(np.where(samples["diverged"], np.inf, samples["d_min"])))
     result = rollout(_playback(samples["actions"][best]), config,
                      video=out / "best_rollout.mp4" if settings.video else None)
     export_trajectory(out / "best_rollout.csv", result["times"], result["joint_targets"])
@@ -260,7 +260,8 @@ def sample_rollouts(policy, config: HitTargetConfig, n: int = 64, std: float = 0
     """``n`` episodes of ``policy`` (a callable: observations (n, 18) -> mean actions) stepped
     together in one batch: rollout 0 takes the mean actions, the others the mean plus
     Gaussian noise of ``std`` (the policy's exploration; seeded by ``seed``), clipped to
-    [-1, 1]. Returns per rollout ``d_min``, ``d_min_3d`` (m), ``success``, ``steps`` and
+    [-1, 1]. Returns per rollout ``d_min``, ``d_min_3d`` (m), ``success``, ``diverged``
+    (the rope stopped: the episode was cut short there), ``steps`` and
     ``actions`` (a list of (steps, 3) arrays, each up to its episode's end)."""
     from .batch import HitTargetBatch
 
@@ -275,6 +276,7 @@ def sample_rollouts(policy, config: HitTargetConfig, n: int = 64, std: float = 0
     live = np.ones(n, dtype=bool)
     d_min, d_min_3d = batch.d_min.copy(), batch.d_min_3d.copy()
     success = np.zeros(n, dtype=bool)
+    failed = np.zeros(n, dtype=bool)
     actions: list[list[np.ndarray]] = [[] for _ in range(n)]
     for _ in range(config.episode_steps):
         a = np.asarray(policy(batch.observations()), dtype=np.float64).reshape(n, -1)
@@ -288,10 +290,11 @@ def sample_rollouts(policy, config: HitTargetConfig, n: int = 64, std: float = 0
         d_min = np.where(ok, batch.d_min, d_min)
         d_min_3d = np.where(ok, batch.d_min_3d, d_min_3d)
         success |= live & won
+        failed |= live & diverged
         live &= ~(terminated | truncated)
         if not live.any():
             break
-    return {"d_min": d_min, "d_min_3d": d_min_3d, "success": success,
+    return {"d_min": d_min, "d_min_3d": d_min_3d, "success": success, "diverged": failed,
             "steps": np.array([len(x) for x in actions]),
             "actions": [np.array(x).reshape(-1, a.shape[1]) for x in actions]}
 
