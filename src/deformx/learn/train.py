@@ -270,22 +270,21 @@ def sample_rollouts(policy, config: HitTargetConfig, n: int = 64, std: float = 0
     if not std >= 0.0:
         raise ValueError(f"std must be >= 0, got {std!r}")
     rng = np.random.default_rng(seed)
-    batch = HitTargetBatch(config, n)
-    for i in range(n):
-        batch.reset(i)
+    batch = HitTargetBatch(config, n)  # every copy starts reset
     live = np.ones(n, dtype=bool)
     d_min, d_min_3d = batch.d_min.copy(), batch.d_min_3d.copy()
     success = np.zeros(n, dtype=bool)
     failed = np.zeros(n, dtype=bool)
-    actions: list[list[np.ndarray]] = [[] for _ in range(n)]
+    steps = np.zeros(n, dtype=np.int64)
+    taken = []  # (n, 3) per step; copy i's episode is its first steps[i] rows
     for _ in range(config.episode_steps):
         a = np.asarray(policy(batch.observations()), dtype=np.float64).reshape(n, -1)
         noise = rng.standard_normal(a.shape)
         noise[0] = 0.0
         a = np.clip(a + std * noise, -1.0, 1.0)
         _, terminated, truncated, won, diverged = batch.step(a)
-        for i in np.flatnonzero(live):
-            actions[i].append(a[i])
+        taken.append(a)
+        steps += live
         ok = live & ~diverged  # a diverged copy was put back: its last values stand
         d_min = np.where(ok, batch.d_min, d_min)
         d_min_3d = np.where(ok, batch.d_min_3d, d_min_3d)
@@ -294,15 +293,17 @@ def sample_rollouts(policy, config: HitTargetConfig, n: int = 64, std: float = 0
         live &= ~(terminated | truncated)
         if not live.any():
             break
+    taken = np.array(taken)
     return {"d_min": d_min, "d_min_3d": d_min_3d, "success": success, "diverged": failed,
-            "steps": np.array([len(x) for x in actions]),
-            "actions": [np.array(x).reshape(-1, a.shape[1]) for x in actions]}
+            "steps": steps, "actions": [taken[:k, i] for i, k in enumerate(steps)]}
 
 
 def _playback(actions: np.ndarray):
     """A policy that plays ``actions`` back in order (then zeros: the commands hold)."""
-    it = iter(np.asarray(actions))
-    return lambda obs: next(it, np.zeros(np.asarray(actions).shape[1]))
+    actions = np.asarray(actions)
+    it = iter(actions)
+    hold = np.zeros(actions.shape[1])
+    return lambda obs: next(it, hold)
 
 
 def export_trajectory(path: str | Path, times: np.ndarray, joint_targets: np.ndarray) -> Path:
