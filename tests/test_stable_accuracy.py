@@ -139,11 +139,11 @@ def _mode1(x):
     return phi, dphi
 
 
-def _vibrate(case, integrator, dt, duration, sample=VIB_DT):
+def _vibrate(case, integrator, dt, duration, sample=VIB_DT, order=1):
     """Tip z(t), sampled every ``sample`` s, of a cantilever started in the first mode."""
     length, radius, material = VIB_CASES[case]
     rod = _cantilever(VIB_N, length, radius, material)
-    world = dx.World(gravity=(0, 0, 0), dt=dt, integrator=integrator)
+    world = dx.World(gravity=(0, 0, 0), dt=dt, integrator=integrator, order=order)
     world.add_rod(rod)
     rod.fix_start()
     omega = 2.0 * np.pi * _eb_frequency(length, radius, material)
@@ -258,9 +258,10 @@ CONV_SAMPLES = np.round(np.arange(1, 11) * 0.04, 10)  # every 0.04 s, a multiple
 CONV_DTS = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4)
 
 
-def _drop(integrator, dt):
+def _drop(integrator, dt, order=1, tolerance=1e-4):
     rod = _cantilever(CONV_N, CONV_L, CONV_R, RUBBER)
-    world = dx.World(gravity=(0, 0, -G_ACC), dt=dt, integrator=integrator)
+    world = dx.World(gravity=(0, 0, -G_ACC), dt=dt, integrator=integrator, order=order,
+                     tolerance=tolerance)
     world.add_rod(rod)
     rod.fix_start()
     frames, done = [], 0

@@ -34,16 +34,18 @@ from .banded import BLOCK_BAND
 # vectors, frames, scalars, integers): the kernels then pass ~17 arrays instead of ~70,
 # which keeps numba's compile time down (it grows with every array of every signature).
 # State rows come first in each stack: positions, velocities, frames, angular velocities;
-# the stable integrator's step start, predictor rates, viscous loads, contact planes and
+# the stable integrator's step start, the state its last step ended in (second-order steps
+# use the step before only if nothing changed the state since), predictor rates, viscous
+# loads, contact planes and
 # friction anchors, rod-rod contact offsets, the explicit integrator's start-inside offsets,
 # last step, contraction rate and contact count; the rod-rod
 # Verlet list's reference positions and (pairs, valid, builds, touching).
 ROD_ARRAYS = (
-    ('n3', 'f', (12, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'ref', 'fext', 'force',
-                              'contact_force', 'xp', 'extra', 'acc'), 6),
-    ('e3', 'f', (11, 'E', 3), ('omega', 'wn', 'tn_el', 'J', 'inv_J', 'S', 'rest_sigma', 'text',
-                              'torque', 'stress', 'alpha'), 3),
-    ('e33', 'f', (2, 'E', 3, 3), ('Q', 'Qn'), 2),
+    ('n3', 'f', (16, 'N', 3), ('pos', 'vel', 'xn', 'vn', 'fn_el', 'ref', 'xe', 've', 'fext',
+                              'force', 'contact_force', 'xp', 'extra', 'acc', 'xh', 'vh'), 8),
+    ('e3', 'f', (13, 'E', 3), ('omega', 'wn', 'tn_el', 'we', 'J', 'inv_J', 'S', 'rest_sigma',
+                              'text', 'torque', 'stress', 'alpha', 'wh'), 4),
+    ('e33', 'f', (4, 'E', 3, 3), ('Q', 'Qn', 'Qe', 'Qh'), 3),
     ('v3', 'f', (6, 'V', 3), ('B', 'rest_kappa', 'kappa', 'couple', 'scr_C', 'scr_X'), 0),
     ('n1', 'f', (4, 'N'), ('pen_off', 'mass', 'node_radius', 'node_kmin'), 1),
     ('e1', 'f', (5, 'E'), ('pair_off', 'rest_len', 'seg_radius', 'dil', 'scr_edot'), 1),
@@ -69,11 +71,11 @@ ROD_ARRAYS = (
     ('sys_fixed', 'i', ('B',), None, 0),
 )
 # Row indices of the stacked rod fields.
-(N_POS, N_VEL, N_XN, N_VN, N_FN_EL, N_REF, N_FEXT, N_FORCE, N_CONTACT_FORCE, N_XP,
- N_EXTRA, N_ACC) = range(12)
-(E_OMEGA, E_WN, E_TN_EL, E_J, E_INV_J, E_S, E_REST_SIGMA, E_TEXT, E_TORQUE, E_STRESS,
- E_ALPHA) = range(11)
-E_Q, E_QN = 0, 1
+(N_POS, N_VEL, N_XN, N_VN, N_FN_EL, N_REF, N_XE, N_VE, N_FEXT, N_FORCE, N_CONTACT_FORCE,
+ N_XP, N_EXTRA, N_ACC, N_XH, N_VH) = range(16)
+(E_OMEGA, E_WN, E_TN_EL, E_WE, E_J, E_INV_J, E_S, E_REST_SIGMA, E_TEXT, E_TORQUE, E_STRESS,
+ E_ALPHA, E_WH) = range(13)
+E_Q, E_QN, E_QE, E_QH = 0, 1, 2, 3
 V_B, V_REST_KAPPA, V_KAPPA, V_COUPLE, V_SCR_C, V_SCR_X = 0, 1, 2, 3, 4, 5
 N_PEN_OFF, N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2, 3
 E_PAIR_OFF, E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3, 4
@@ -258,8 +260,10 @@ def _carve_cols_overload(F, I):
 
 # The run's scalars (float64 array ``sim``) and switches (int64 array ``opts``).
 # sim: dt (s), gravity (m/s^2), max strain, Newton tolerance, rod-rod contact stiffness,
-# damping and friction (negative: automatic), Verlet-list skin (m), time at the call's start.
-SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_TOL, SIM_RR, SIM_SKIN, SIM_T, SIM_LEN = 0, 1, 4, 5, 6, 9, 10, 11
+# damping and friction (negative: automatic), Verlet-list skin (m), time at the call's start,
+# order of the stable integrator (1 backward Euler, 2 BDF2).
+SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_TOL, SIM_RR, SIM_SKIN, SIM_T, SIM_ORDER, SIM_LEN = (
+    0, 1, 4, 5, 6, 9, 10, 11, 12)
 # opts: Newton iterations, load the drivers into the rods' copies first, store them back
 # after, the range of rods to advance, and the call's outcome (the entry kernels' flag).
 OPT_ITER, OPT_LOAD, OPT_STORE, OPT_R0, OPT_R1, OPT_FLAG, OPT_LEN = 0, 1, 2, 3, 4, 5, 6

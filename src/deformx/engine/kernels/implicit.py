@@ -39,12 +39,12 @@ from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
 from .bundles import (
     borrow,
-    E_DIL, E_J, E_OMEGA, E_PAIR_OFF, E_Q, E_QN, E_REST_LEN, E_S, E_STRESS, E_TEXT, E_TN_EL,
-    E_ALPHA, E_TORQUE, E_WN, N_ACC, N_CONTACT_FORCE,
-    N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VEL, N_VN, N_XN, N_XP,
+    E_DIL, E_J, E_OMEGA, E_PAIR_OFF, E_Q, E_QE, E_QH, E_QN, E_REST_LEN, E_S, E_STRESS, E_TEXT,
+    E_TN_EL, E_ALPHA, E_TORQUE, E_WE, E_WH, E_WN, N_ACC, N_CONTACT_FORCE,
+    N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VE, N_VEL, N_VH, N_VN, N_XE, N_XH, N_XN, N_XP,
     OPT_ITER, R_CLOSED, R_CONTACTS, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU,
     R_TIMES, R_VOR0,
-    SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_RR, SIM_TOL, V_B, V_KAPPA, V_REST_VOR,
+    SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_ORDER, SIM_RR, SIM_TOL, V_B, V_KAPPA, V_REST_VOR,
 )
 from .drivers import (
     add_frame_reaction,
@@ -337,7 +337,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     # rod-rod scratch.
     nc = 3 * m  # per pair a normal column and, with friction, two tangent ones
     ints = np.zeros(3 * (K + 1) + SP_K + 2 * n_nodes + 3 * nc, dtype=np.int64)
-    floats = np.zeros(6 * K + 12 * SP_K + 5 * nc)
+    floats = np.zeros(7 * K + 12 * SP_K + 5 * nc)
     # The island's system stacks its rods' block rows; per rod its offsets in the stack.
     boff, noff, eoff = (borrow(ints, 0, (K + 1,)), borrow(ints, K + 1, (K + 1,)),
                         borrow(ints, 2 * K + 2, (K + 1,)))
@@ -349,10 +349,11 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     nbt = boff[K]
     offs = (boff, noff, eoff)
     # Per rod: scale, last sub-step, updates (this and the previous iteration), whether its
-    # slots hold a contact plane this step, whether its contacts are calm (see below).
+    # slots hold a contact plane this step, whether its contacts are calm (see below), the
+    # step of its backward-Euler form (2/3 of the sub-step for BDF2).
     per_rod = (borrow(floats, 0, (K,)), borrow(floats, K, (K,)), borrow(floats, 2 * K, (K,)),
                borrow(floats, 3 * K, (K,)), borrow(floats, 4 * K, (K,)),
-               borrow(floats, 5 * K, (K,)))
+               borrow(floats, 5 * K, (K,)), borrow(floats, 6 * K, (K,)))
     # Newton matrix, residual, prescribed unknowns; the predictor's h * (last step's
     # acceleration) per node and per element. One rod: its own rows of the packed system
     # (rods on threads never share them); an island (solved one at a time): the first rows.
@@ -366,7 +367,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     system = (rd.sys_A[b0:b0 + nbt], rd.sys_rhs[b0:b0 + nbt], fixed,
               rd.n3[N_ACC][n0:n0 + noff[K]], rd.e3[E_ALPHA][e0:e0 + eoff[K]])
     # Contact planes per slot (see contact/speculative.py): scratch.
-    o, f = 3 * K + 3, 6 * K
+    o, f = 3 * K + 3, 7 * K
     keep = (borrow(ints, o, (SP_K,)), borrow(floats, f, (SP_K,)),
             borrow(floats, f + SP_K, (SP_K, 8)), borrow(floats, f + 9 * SP_K, (SP_K, 3)))
     # Rod-rod contacts: each node's block in the stack and rod slot, the low-rank terms.
@@ -392,7 +393,7 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
 def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     """The steps of ``advance_island_implicit`` in the work arrays ``work`` it allocated."""
     pairs, plist, pp, ps = pc
-    (boff, noff, eoff), (scale, last_hs, upd, prev_upd, near, calm), system, keep, lowrank = work
+    (boff, noff, eoff), (scale, last_hs, upd, prev_upd, near, calm, hb), system, keep, lowrank = work
     A, rhs, fixed, acc, alpha = system
     keep_src, keep_f, keep_n, x_start = keep
     node_block, node_rod, Z, S, act, cdir, ck, csup, u = lowrank
@@ -409,6 +410,14 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     fext, text, xp = rd.n3[N_FEXT], rd.e3[E_TEXT], rd.n3[N_XP]
     force, torque, dil, kappa = rd.n3[N_FORCE], rd.e3[E_TORQUE], rd.e1[E_DIL], rd.v3[V_KAPPA]
     el_K, stats, status = rd.el_K, rd.stats, rd.status
+    # BDF2 solves the backward-Euler equations from the extrapolated start (xh, vh, Qh, wh) =
+    # (4 x_n - x_n-1) / 3 etc. with 2/3 of the step (for that rod: ``hb``), on steps that follow
+    # one of the same size and find the rod as that step left it (xe, ve, Qe, we).
+    order2 = sim[SIM_ORDER] == 2.0
+    xe, ve, Qe, we = rd.n3[N_XE], rd.n3[N_VE], rd.e33[E_QE], rd.e3[E_WE]
+    xb, vb, Qb, wb = xn, vn, Qn, wn  # the start the Newton equations step from
+    if order2:
+        xb, vb, Qb, wb = rd.n3[N_XH], rd.n3[N_VH], rd.e33[E_QH], rd.e3[E_WH]
     planes = env.planes
     h = dt
     K = isl.shape[0]
@@ -479,12 +488,27 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             # misleads Newton, so a rod near a contact only gets a small third-order term
             # h^2 (v - v_prev).
             extrapolate = 0.0 if last_hs[k] != hs else (hs if touching else 1.0)
+            bdf = order2 and last_hs[k] == hs and _as_left(n0, nn, e0, ne, pos, vel, Q, omega,
+                                                           xe, ve, Qe, we)
+            third = 1.0 / 3.0 if bdf else 0.0
+            hb[k] = 2.0 * hs / 3.0 if bdf else hs
             for i in range(n0, n0 + nn):
                 for d in range(3):
                     acc[noff[k] + i - n0, d] = extrapolate * (vel[i, d] - vn[i, d])
+                    if order2:
+                        xb[i, d] = pos[i, d] + third * (pos[i, d] - xn[i, d])
+                        vb[i, d] = vel[i, d] + third * (vel[i, d] - vn[i, d])
                     xn[i, d] = pos[i, d]
                     vn[i, d] = vel[i, d]
             for e in range(e0, e0 + ne):
+                if order2:  # a third of the last step's rotation on from Q_n
+                    w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
+                    for a in range(3):
+                        wb[e, a] = omega[e, a] + third * (omega[e, a] - wn[e, a])
+                        for b in range(3):
+                            Qb[e, a, b] = Q[e, a, b]
+                    if bdf:
+                        rotate_directors(Qb, e, third, w0, w1, w2)
                 for a in range(3):
                     alpha[eoff[k] + e - e0, a] = extrapolate * (omega[e, a] - wn[e, a])
                     wn[e, a] = omega[e, a]
@@ -519,7 +543,6 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                                      fixed[boff[k]:boff[k + 1]]) > 0:
                     calm[k] = 0.0
         t_new = t + hs
-        inv_hs = 1.0 / hs  # the per-node and per-element loops multiply
         set_rounds = 0
         frozen = False  # friction bounds fixed for the rest of the step
         # Iteration at which the contact set last changed. Rods in contact with each other get
@@ -541,7 +564,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
         previous = math.inf
         for k in range(K):
             n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
-            _implied_rates(n0, nn, e0, ne, inv_hs, pos, xn, Q, Qn, vel, omega)
+            _implied_rates(n0, nn, e0, ne, 1.0 / hb[k], pos, xb, Q, Qb, vel, omega)
         active = 0
         factored_active = -1
         while it < budget:
@@ -588,18 +611,19 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
                 nu = rod_nu[r]
                 bo = boff[k]
+                ihb = 1.0 / hb[k]
                 # Residual (negated): forces minus inertia and damping.
                 for i in range(nn):
                     g = n0 + i
                     for d in range(3):
                         rhs[bo + 2 * i, d] = force[g, d] - mass[g] * (
-                            (vel[g, d] - vn[g, d]) * inv_hs + nu * vel[g, d])
+                            (vel[g, d] - vb[g, d]) * ihb + nu * vel[g, d])
                 for j in range(ne):
                     e = e0 + j
                     inv_dil = 1.0 / dil[e]
                     for d in range(3):
                         rhs[bo + 2 * j + 1, d] = (torque[e, d] + text[e, d] - J[e, d] * inv_dil * (
-                            (omega[e, d] - wn[e, d]) * inv_hs + nu * omega[e, d]))
+                            (omega[e, d] - wb[e, d]) * ihb + nu * omega[e, d]))
                 c0, c1 = env.rod_pcon[r], env.rod_pcon[r + 1]
                 f0, f1 = env.rod_fcon[r], env.rod_fcon[r + 1]
                 if c1 > c0 or f1 > f0:  # what the clamps hold is the residual of their rows
@@ -629,7 +653,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 bo, nb = boff[k], boff[k + 1] - boff[k]
                 Ak = A[bo:bo + nb]
                 for geometric in (True, False):
-                    _assemble(hs, ext, rd, rod_nu[r], 1.0 + rod_tau[r] / hs, geometric, Ak)
+                    _assemble(hb[k], ext, rd, rod_nu[r], 1.0 + rod_tau[r] / hs, geometric, Ak)
                     if near[k] != 0.0:
                         _add_element_stiffness(Ak, e0, ne, nn, el_K)
                     for q in range(nb):
@@ -687,19 +711,20 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 upd[k] *= step_scale
                 n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
                 bo = boff[k]
+                ihb = 1.0 / hb[k]
                 for i in range(nn):
                     g = n0 + i
                     for d in range(3):
                         pos[g, d] += step_scale * rhs[bo + 2 * i, d]
-                        vel[g, d] = (pos[g, d] - xn[g, d]) * inv_hs
+                        vel[g, d] = (pos[g, d] - xb[g, d]) * ihb
                 for j in range(ne):
                     b = bo + 2 * j + 1
                     e = e0 + j
                     rotate_directors(Q, e, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
-                    w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
-                    omega[e, 0] = w0 * inv_hs
-                    omega[e, 1] = w1 * inv_hs
-                    omega[e, 2] = w2 * inv_hs
+                    w0, w1, w2 = relative_rotation_vector(Qb, e, Q, e)
+                    omega[e, 0] = w0 * ihb
+                    omega[e, 1] = w1 * ihb
+                    omega[e, 2] = w2 * ihb
             # Convergence: what is left after this update is about rate * update, with the
             # contraction rate measured on this and earlier steps (CVODE's test), so smooth
             # steps can stop after one iteration. Not in rod-rod contact, nor near a contact
@@ -793,6 +818,16 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 for e in range(e0, e0 + ne):
                     pair_off[e] = -1.0
             last_hs[k] = hs
+            if order2:  # what the next step checks it finds (nothing changed in between)
+                for i in range(n0, n0 + nn):
+                    for d in range(3):
+                        xe[i, d] = pos[i, d]
+                        ve[i, d] = vel[i, d]
+                for e in range(e0, e0 + ne):
+                    for a in range(3):
+                        we[e, a] = omega[e, a]
+                        for b in range(3):
+                            Qe[e, a, b] = Q[e, a, b]
             stats[r, 1] += it
             if not converged:
                 stats[r, 2] += 1
@@ -817,6 +852,24 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
         status[isl[k], 2] = n_steps
         h_prev[isl[k]] = last_hs[k]
     return t
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def _as_left(n0, nn, e0, ne, pos, vel, Q, omega, xe, ve, Qe, we):
+    """Whether the rod's state is exactly as its last step left it (a write between steps,
+    such as a reset or a teleport, breaks the history a second-order step needs)."""
+    for i in range(n0, n0 + nn):
+        for d in range(3):
+            if pos[i, d] != xe[i, d] or vel[i, d] != ve[i, d]:
+                return False
+    for e in range(e0, e0 + ne):
+        for a in range(3):
+            if omega[e, a] != we[e, a]:
+                return False
+            for b in range(3):
+                if Q[e, a, b] != Qe[e, a, b]:
+                    return False
+    return True
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
