@@ -135,7 +135,8 @@ class HitTargetBatch:
                 rope.set_shape(shape)
         else:
             world = dx.World(dt=cfg.rope_dt, integrator=cfg.integrator, rod_contact=False,
-                             max_strain=cfg.max_strain)
+                             max_strain=cfg.max_strain,
+                             order=cfg.order if cfg.integrator == "stable" else 1)
             for shape, p in zip(shapes, self.params):
                 self.rods.append(world.add_rod(dx.Rod.from_points(
                     shape, radius=cfg.radius, density=p["density"],

@@ -39,8 +39,9 @@ class HitTargetConfig:
     stretch_modulus: float | None = 2e7
     shear_modulus: float | None = 6.7e6
     max_strain: float = 1.0                  # element strain the engine calls a divergence
-    rope_dt: float = 5e-4                    # s, Cosserat rope's step (4 per control step)
+    rope_dt: float = 2e-3                    # s, Cosserat rope's step (one per control step)
     integrator: str = "stable"               # Cosserat rope: "stable" or "verlet" (explicit)
+    order: int = 2                           # stable integrator: 2 BDF2, 1 backward Euler
     ground_stiffness: float = 100.0          # N/m per node
     clamp_frame: bool = True                 # the rope's first element turns with the stick
     capsule_damping: float = 1e-2            # N m s/rad per joint of the capsule rope
