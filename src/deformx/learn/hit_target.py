@@ -4,8 +4,8 @@ close as possible to a target (``d_min``), as a Gymnasium environment.
 Every number of the authors' task (their public code and the paper's appendix) is a field of
 :class:`~deformx.learn.task.HitTargetConfig`; ``docs/learning.md`` lists them. The robot steps
 in MuJoCo at the 2 ms control rate, the rope in DeformX through
-:class:`deformx.cosim.CoSimulation` (``rope="cosserat"``: the stable integrator at 0.5 ms,
-four substeps per control step; see ``docs/learning.md`` for the choice) or as a chain of
+:class:`deformx.cosim.CoSimulation` (``rope="cosserat"``: the stable integrator at second
+order, BDF2, one 2 ms step per control step; see ``docs/learning.md`` for the choice) or as a chain of
 capsules inside MuJoCo (``rope="capsule"``, the baseline). The physics is a
 :class:`~deformx.learn.batch.HitTargetBatch` of one.
 

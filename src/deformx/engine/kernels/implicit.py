@@ -779,15 +779,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             # Roll back and retry the step in halves; give up only at a tiny fraction of dt.
             for k in range(K):
                 n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
-                for i in range(n0, n0 + nn):
-                    for d in range(3):
-                        pos[i, d] = xn[i, d]
-                        vel[i, d] = vn[i, d]
-                for e in range(e0, e0 + ne):
-                    for a in range(3):
-                        omega[e, a] = wn[e, a]
-                        for b in range(3):
-                            Q[e, a, b] = Qn[e, a, b]
+                _copy_state(n0, nn, e0, ne, (xn, vn, wn, Qn), (pos, vel, omega, Q))
                 last_hs[k] = 0.0
             if hs > h / MAX_REFINE:
                 hs *= 0.5
@@ -819,15 +811,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     pair_off[e] = -1.0
             last_hs[k] = hs
             if order2:  # what the next step checks it finds (nothing changed in between)
-                for i in range(n0, n0 + nn):
-                    for d in range(3):
-                        xe[i, d] = pos[i, d]
-                        ve[i, d] = vel[i, d]
-                for e in range(e0, e0 + ne):
-                    for a in range(3):
-                        we[e, a] = omega[e, a]
-                        for b in range(3):
-                            Qe[e, a, b] = Q[e, a, b]
+                _copy_state(n0, nn, e0, ne, (pos, vel, omega, Q), (xe, ve, we, Qe))
             stats[r, 1] += it
             if not converged:
                 stats[r, 2] += 1
@@ -852,6 +836,21 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
         status[isl[k], 2] = n_steps
         h_prev[isl[k]] = last_hs[k]
     return t
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _copy_state(n0, nn, e0, ne, src, dst):
+    """Copy a rod's (positions, velocities, angular velocities, frames) from ``src`` to
+    ``dst``."""
+    for i in range(n0, n0 + nn):
+        for d in range(3):
+            dst[0][i, d] = src[0][i, d]
+            dst[1][i, d] = src[1][i, d]
+    for e in range(e0, e0 + ne):
+        for a in range(3):
+            dst[2][e, a] = src[2][e, a]
+            for b in range(3):
+                dst[3][e, a, b] = src[3][e, a, b]
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
