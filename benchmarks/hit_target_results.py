@@ -10,9 +10,10 @@
 3. cross-model transfer - the offline stand-in for the paper's sim-to-real table: both
    policies' trajectories replayed on a reference rope (the default rope's moduli,
    ``--ref-elements`` elements, perturbed parameters; by default the stable integrator
-   (backward Euler) at ``--ref-dt`` = 5e-5 s, 40 steps per control step: the explicit integrator stops on these
-   whips - a 100-element rope passing a fold at its step limit runs away in stretch, at 5e-6 s
-   it turns NaN - see docs/learning.md; ``--ref-integrator verlet`` runs it at its limit).
+   (backward Euler) at ``--ref-dt`` = 5e-5 s, 40 steps per control step: the explicit
+   integrator stops on these whips - a 100-element rope passing a fold at its step limit runs
+   away in stretch, at 5e-6 s it turns NaN - see docs/learning.md; ``--ref-integrator
+   verlet`` runs it at its limit).
    A replay whose rope diverged counts as "diverged", not as a distance.
 
     python benchmarks/hit_target_results.py --steps 200000 --envs 16 --out runs

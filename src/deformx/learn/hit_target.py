@@ -5,8 +5,8 @@ Every number of the authors' task (their public code and the paper's appendix) i
 :class:`~deformx.learn.task.HitTargetConfig`; ``docs/learning.md`` lists them. The robot steps
 in MuJoCo at the 2 ms control rate, the rope in DeformX through
 :class:`deformx.cosim.CoSimulation` (``rope="cosserat"``: the stable integrator at second
-order, BDF2, one 2 ms step per control step; see ``docs/learning.md`` for the choice) or as a chain of
-capsules inside MuJoCo (``rope="capsule"``, the baseline). The physics is a
+order, BDF2, one 2 ms step per control step; see ``docs/learning.md`` for the choice) or as
+a chain of capsules inside MuJoCo (``rope="capsule"``, the baseline). The physics is a
 :class:`~deformx.learn.batch.HitTargetBatch` of one.
 
 Frames: the environment's frame is the world frame; the robot's ``base_link`` stands at

@@ -502,12 +502,12 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     vn[i, d] = vel[i, d]
             for e in range(e0, e0 + ne):
                 if order2:  # a third of the last step's rotation on from Q_n
-                    w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
                     for a in range(3):
                         wb[e, a] = omega[e, a] + third * (omega[e, a] - wn[e, a])
                         for b in range(3):
                             Qb[e, a, b] = Q[e, a, b]
                     if bdf:
+                        w0, w1, w2 = relative_rotation_vector(Qn, e, Q, e)
                         rotate_directors(Qb, e, third, w0, w1, w2)
                 for a in range(3):
                     alpha[eoff[k] + e - e0, a] = extrapolate * (omega[e, a] - wn[e, a])
