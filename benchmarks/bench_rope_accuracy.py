@@ -42,7 +42,8 @@ def clamp_motion(t: float, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
 def run(integrator: str, dt: float, motion: str, duration: float,
         moduli: dict | None = None) -> tuple[np.ndarray, float]:
     """Tip positions at every control step and wall seconds per control step; ``moduli``:
-    stretch_modulus / shear_modulus of the rope (default: from E, as the authors')."""
+    stretch_modulus / shear_modulus / twist_modulus of the rope (default: from E, as the
+    authors')."""
     world = dx.World(dt=dt, integrator={"explicit": "verlet", "bdf2": "stable"}.get(
         integrator, integrator), order=2 if integrator == "bdf2" else 1)
     rod = world.add_rod(dx.Rod.straight(n_elements=20, start=(0, 0, 1), direction=(0, 0, -1),
@@ -75,11 +76,14 @@ def main() -> None:
     parser.add_argument("--motion", choices=("vertical", "swing", "both"), default="both")
     parser.add_argument("--stretch-modulus", type=float, default=None, help="Pa (default E)")
     parser.add_argument("--shear-modulus", type=float, default=None, help="Pa (default E/3)")
+    parser.add_argument("--twist-modulus", type=float, default=None,
+                        help="Pa (default: the shear modulus)")
     parser.add_argument("--cases", nargs="+", default=None,
                         help="integrator:dt pairs, e.g. stable:5e-4 bdf2:2e-3 explicit:1e-4")
     args = parser.parse_args()
     moduli = {k: v for k, v in (("stretch_modulus", args.stretch_modulus),
-                                ("shear_modulus", args.shear_modulus)) if v is not None}
+                                ("shear_modulus", args.shear_modulus),
+                                ("twist_modulus", args.twist_modulus)) if v is not None}
     cases = CASES if args.cases is None else [("explicit", 1e-5)] + [
         (c.split(":")[0], float(c.split(":")[1])) for c in args.cases]
     console = Console()

@@ -7,7 +7,8 @@ import pytest
 
 import deformx as dx
 
-NEW = dict(density=900.0, youngs_modulus=3e6, shear_modulus=1.1e6, stretch_modulus=5e6)
+NEW = dict(density=900.0, youngs_modulus=3e6, shear_modulus=1.1e6, stretch_modulus=5e6,
+           twist_modulus=2e5)
 
 
 def _world(integrator: str, dt: float, **material) -> tuple[dx.World, dx.Rod]:
@@ -48,6 +49,12 @@ def test_a_new_youngs_modulus_carries_shear_and_stretch_along():
     assert rod.stretch_modulus == 4e6
     rod.set_material(poisson_ratio=0.5)
     assert rod.shear_modulus == pytest.approx(4e6 / 3.0, rel=1e-14)
+    assert rod.twist_modulus == rod.shear_modulus  # the default twist follows the shear
+    rope = dx.Rod.straight(10, youngs_modulus=1e6, shear_modulus=4e5, twist_modulus=1e5)
+    rope.set_material(youngs_modulus=2e6)  # a twist modulus of its own scales with E
+    assert (rope.shear_modulus, rope.twist_modulus) == (8e5, 2e5)
+    rope.set_material(twist_modulus=3e5)
+    assert (rope.shear_modulus, rope.twist_modulus) == (8e5, 3e5)
 
 
 def test_a_lighter_rope_sags_less_after_the_change():

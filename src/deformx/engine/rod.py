@@ -79,13 +79,16 @@ class Rod:
     Use :meth:`straight` or :meth:`from_points`. SI units throughout. ``stretch_modulus``
     (Pa, default ``youngs_modulus``) sets the axial stiffness E_s A apart from the bending
     E I: a rope or a stranded cable bends like a soft solid but stretches like its fibres.
+    ``twist_modulus`` (Pa, default the shear modulus) likewise sets the torsional stiffness
+    G_t J apart from the shear stiffness G A: a rope held stiff in shear still twists easily.
     """
 
     def __init__(self, positions: np.ndarray, directors: np.ndarray, *, radius: float,
                  density: float, youngs_modulus: float, shear_modulus: float | None = None,
                  poisson_ratio: float | None = None, damping: float = 0.0, closed: bool = False,
                  rest_kappa: np.ndarray | None = None, internal_damping: float = 0.0,
-                 stretch_modulus: float | None = None) -> None:
+                 stretch_modulus: float | None = None,
+                 twist_modulus: float | None = None) -> None:
         self.closed = bool(closed)
         self.radius = check.positive("radius", radius, "m")
         self.density = check.positive("density", density, "kg/m^3")
@@ -93,6 +96,8 @@ class Rod:
         self.shear_modulus = shear_modulus_from(self.youngs_modulus, shear_modulus, poisson_ratio)
         self.stretch_modulus = self.youngs_modulus if stretch_modulus is None else \
             check.positive("stretch_modulus", stretch_modulus, "Pa")
+        self.twist_modulus = self.shear_modulus if twist_modulus is None else \
+            check.positive("twist_modulus", twist_modulus, "Pa")
         self._damping = check.non_negative("damping", damping, "1/s")
         self._internal_damping = check.non_negative("internal_damping", internal_damping, "s")
 
@@ -146,7 +151,8 @@ class Rod:
                  shear_modulus: float | None = None, poisson_ratio: float | None = None,
                  normal: Sequence[float] | None = None, damping: float = 0.0,
                  rest_curvature: np.ndarray | Sequence[float] | None = None,
-                 internal_damping: float = 0.0, stretch_modulus: float | None = None) -> "Rod":
+                 internal_damping: float = 0.0, stretch_modulus: float | None = None,
+                 twist_modulus: float | None = None) -> "Rod":
         """Straight rod of ``length`` m from ``start`` along ``direction``.
 
         ``normal`` is d1 of the material frames (must be perpendicular to ``direction``);
@@ -176,7 +182,7 @@ class Rod:
         return cls(pos, Q, radius=radius, density=density, youngs_modulus=youngs_modulus,
                    shear_modulus=shear_modulus, poisson_ratio=poisson_ratio, damping=damping,
                    rest_kappa=rest_curvature, internal_damping=internal_damping,
-                   stretch_modulus=stretch_modulus)
+                   stretch_modulus=stretch_modulus, twist_modulus=twist_modulus)
 
     @classmethod
     def from_points(cls, points: np.ndarray | Sequence[Sequence[float]], *, radius: float = 0.005,
@@ -184,8 +190,8 @@ class Rod:
                     shear_modulus: float | None = None, poisson_ratio: float | None = None,
                     closed: bool = False, rest_shape: str = "given",
                     normal: Sequence[float] | None = None, damping: float = 0.0,
-                    internal_damping: float = 0.0, stretch_modulus: float | None = None
-                    ) -> "Rod":
+                    internal_damping: float = 0.0, stretch_modulus: float | None = None,
+                    twist_modulus: float | None = None) -> "Rod":
         """Rod through ``points`` (m, shape (m, 3)); one element per segment.
 
         ``closed=True`` joins the last point to the first (a ring). ``rest_shape="given"``
@@ -219,7 +225,7 @@ class Rod:
         rod = cls(pts, Q, radius=radius, density=density, youngs_modulus=youngs_modulus,
                   shear_modulus=shear_modulus, poisson_ratio=poisson_ratio, damping=damping,
                   closed=closed, internal_damping=internal_damping,
-                  stretch_modulus=stretch_modulus)
+                  stretch_modulus=stretch_modulus, twist_modulus=twist_modulus)
         if rest_shape == "given":
             rod.rest_kappa = curvature_from_directors(Q, rod.rest_voronoi_lengths, rod.closed)
         return rod
@@ -301,7 +307,7 @@ class Rod:
             [ALPHA_SHEAR * self.shear_modulus * area, ALPHA_SHEAR * self.shear_modulus * area,
              self.stretch_modulus * area], (ne, 1))
         bend_elem = np.tile([self.youngs_modulus * inertia, self.youngs_modulus * inertia,
-                             self.shear_modulus * 2.0 * inertia], (ne, 1))
+                             self.twist_modulus * 2.0 * inertia], (ne, 1))
         nv = ne if self.closed else ne - 1
         la, lb = rest_len[:nv], np.roll(rest_len, -1)[:nv]
         ba, bb = bend_elem[:nv], np.roll(bend_elem, -1, axis=0)[:nv]
@@ -309,14 +315,17 @@ class Rod:
 
     def set_material(self, *, density: float | None = None, youngs_modulus: float | None = None,
                      shear_modulus: float | None = None, poisson_ratio: float | None = None,
-                     stretch_modulus: float | None = None) -> None:
+                     stretch_modulus: float | None = None,
+                     twist_modulus: float | None = None) -> None:
         """Change the rod's material in place (domain randomisation at an episode's reset):
         masses, inertia and stiffness are rewritten in the world's buffers, no rebuild; it
         takes effect at the next step. The shape and the state stay as they are.
 
         Parameters left out keep their value, except that a new ``youngs_modulus`` carries the
-        shear and stretch moduli along in proportion unless they are given (``shear_modulus``
-        or ``poisson_ratio``; ``stretch_modulus``). Units: kg/m^3 and Pa.
+        shear, stretch and twist moduli along in proportion unless they are given
+        (``shear_modulus`` or ``poisson_ratio``; ``stretch_modulus``; ``twist_modulus``, which
+        otherwise follows a new shear modulus while it equals the shear modulus). Units: kg/m^3
+        and Pa.
         """
         rho = self.density if density is None else check.positive("density", density, "kg/m^3")
         E = self.youngs_modulus if youngs_modulus is None else check.positive(
@@ -330,7 +339,12 @@ class Rod:
             Es = check.positive("stretch_modulus", stretch_modulus, "Pa")
         else:  # the default stretch modulus is E itself: keep it so, bit for bit
             Es = E if self.stretch_modulus == self.youngs_modulus else self.stretch_modulus * scale
+        if twist_modulus is not None:
+            Gt = check.positive("twist_modulus", twist_modulus, "Pa")
+        else:  # likewise the default twist modulus is the shear modulus
+            Gt = G if self.twist_modulus == self.shear_modulus else self.twist_modulus * scale
         self.density, self.youngs_modulus, self.shear_modulus, self.stretch_modulus = rho, E, G, Es
+        self.twist_modulus = Gt
         self._derive_material()
         if self._world is not None:
             self._world._rod_material_changed(self)
@@ -511,7 +525,8 @@ class Rod:
     def stable_dt(self) -> float:
         """A conservative explicit (Verlet) time step (s) for this rod alone."""
         return explicit_time_step(float(self.rest_lengths.min()), self.radius, self.density,
-                                  max(self.youngs_modulus, self.stretch_modulus),
+                                  max(self.youngs_modulus, self.stretch_modulus,
+                                      self.twist_modulus),
                                   self.shear_modulus)
 
     def __repr__(self) -> str:

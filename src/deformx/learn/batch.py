@@ -142,7 +142,8 @@ class HitTargetBatch:
                     shape, radius=cfg.radius, density=p["density"],
                     youngs_modulus=p["youngs_modulus"], damping=p["damping"],
                     internal_damping=cfg.internal_damping,
-                    stretch_modulus=cfg.stretch_modulus, shear_modulus=cfg.shear_modulus)))
+                    stretch_modulus=cfg.stretch_modulus, shear_modulus=cfg.shear_modulus,
+                    twist_modulus=cfg.twist_of(p["youngs_modulus"]))))
             world.add_plane(stiffness=cfg.ground_stiffness)
             self.sim = cosim.CoSimulation(world, be)
             for i, rod in enumerate(self.rods):
@@ -214,7 +215,8 @@ class HitTargetBatch:
             rod = self.rods[i]
             rod.set_material(density=new["density"], youngs_modulus=new["youngs_modulus"],
                              shear_modulus=cfg.shear_modulus,
-                             stretch_modulus=cfg.stretch_modulus)
+                             stretch_modulus=cfg.stretch_modulus,
+                             twist_modulus=cfg.twist_of(new["youngs_modulus"]))
             rod.damping = new["damping"]
             return
         import mujoco

@@ -38,6 +38,10 @@ class HitTargetConfig:
     # authors' (E and E / 3), whose rope stretches ~100 % at the clamp at 8 m/s (docs/learning.md)
     stretch_modulus: float | None = 2e7
     shear_modulus: float | None = 6.7e6
+    # Pa: the rope twists as the authors' does (None: E / 3, following a randomised E); the
+    # shear modulus above would make it 67x stiffer in twist than in bending, which kinks and
+    # stalls Newton when the rope folds (docs/learning.md)
+    twist_modulus: float | None = None
     max_strain: float = 1.0                  # element strain the engine calls a divergence
     rope_dt: float = 2e-3                    # s, Cosserat rope's step (one per control step)
     integrator: str = "stable"               # Cosserat rope: "stable" or "verlet" (explicit)
@@ -94,12 +98,19 @@ class HitTargetConfig:
                      "stick_length"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        for name in ("stretch_modulus", "shear_modulus", "twist_modulus"):
+            if getattr(self, name) is not None and not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0 Pa or None, got {getattr(self, name)!r}")
         if self.distance not in ("plane", "3d"):
             raise ValueError(f"distance must be 'plane' or '3d', got {self.distance!r}")
         unknown = set(self.randomise) - {"youngs_modulus", "density", "damping"}
         if unknown:
             raise ValueError(f"randomise: only youngs_modulus, density and damping, got "
                              f"{sorted(unknown)}")
+
+    def twist_of(self, youngs_modulus: float) -> float:
+        """The rope's twist modulus (Pa) for a bending modulus ``youngs_modulus`` (Pa)."""
+        return self.twist_modulus if self.twist_modulus is not None else youngs_modulus / 3.0
 
     @property
     def step_limit(self) -> float:
