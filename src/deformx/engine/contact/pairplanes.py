@@ -200,7 +200,7 @@ def pair_plane_forces(plist, m, pairs, rd, X, V, h, dt_ref, rr, pp, ps) -> int:
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def release_pulling_pairs(plist, m, pp, ps) -> int:
-    """Release the active pairs whose force pulls at the converged iterate; returns how many.
+    """Release the active pairs whose force pulls near convergence; returns how many.
     A released pair acts again where it pushes (another rod may press its segments together
     once it has let go)."""
     released = 0

@@ -24,8 +24,8 @@ Newton sees no switch between stick and slip; the anchor is dragged along only b
 when a point ended its step sliding (which also selects ``mu_k`` over ``mu_s`` for the next one).
 
 Within a step a plane that has pushed stays active, its force law applied even where it would
-pull, until Newton has converged; planes that pull then are released (and released ones pressed
-in since re-engaged) and the solve goes on (an active set, so that contacts at the edge of
+pull, until Newton is near convergence (an update within ``RELEASE_NEAR`` tolerances); planes
+that pull then are released (and released ones pressed in since re-engaged) and the solve goes on (an active set, so that contacts at the edge of
 touching cannot switch at every iterate; see ``switch_active``).
 
 Per query slot (node ``i``, element ``N + e``) up to ``SP_K`` planes from different sources
@@ -58,7 +58,7 @@ SP_SRC, SP_ANCHORED, SP_SLIDING, SP_SET, SP_FLIPS = 0, 1, 2, 3, 4
 SP_Q, SP_N, SP_S, SP_D0, SP_A, SP_AS, SP_PEN, SP_FN, SP_OFF, SP_FROZEN = (
     0, 3, 6, 7, 8, 11, 12, 13, 14, 15)
 # SP_SET: within a step a contact is inactive (0), active (1) or released (2: a plane that
-# pulled at a converged solve, out for the rest of the step); SP_FLIPS counts its switches.
+# pulled near convergence, out for the rest of the step); SP_FLIPS counts its switches.
 INACTIVE, ACTIVE, RELEASED = 0, 1, 2
 # Switches within a step before an active contact stays active: none for the planes (a stiff
 # wire on the floor would otherwise rock from iterate to iterate), two for rod-rod pairs
@@ -567,7 +567,7 @@ def project_predictor(r, n0, nn, X, planes, rd, cols, sp_i, sp_f, fixed) -> int:
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def release_pulling(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> int:
-    """At a converged iterate: release the active planes whose force pulls, and re-engage
+    """Near convergence: release the active planes whose force pulls, and re-engage
     released planes that are now deeper than where their force starts (a release elsewhere
     or another rod may have pressed them in since). Returns how many changed."""
     count = 0
