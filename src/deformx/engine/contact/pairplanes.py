@@ -46,6 +46,10 @@ from ..kernels.refcount import NO_REFCOUNT
 PP_S, PP_T, PP_N, PP_D0, PP_OFF, PP_KN, PP_FN, PP_KA, PP_KB, PP_SH, PP_LAG, PP_COLS = (
     0, 1, 2, 5, 6, 7, 8, 9, 10, 11, 14, 15)
 PS_SET, PS_NEAR, PS_FLIPS, PS_COLS = 0, 1, 2, 3
+# A pair that has switched this many times within a step is no longer released: it sits at the
+# edge of touching, pressed together without its force and pulling with it, and each release
+# and re-engagement cost a whole solve (a pile cycled so through all its release rounds).
+KEEP_FLIPS = 3
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
@@ -200,13 +204,13 @@ def pair_plane_forces(plist, m, pairs, rd, X, V, h, dt_ref, rr, pp, ps) -> int:
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def release_pulling_pairs(plist, m, pp, ps) -> int:
-    """Release the active pairs whose force pulls near convergence; returns how many.
-    A released pair acts again where it pushes (another rod may press its segments together
-    once it has let go)."""
+    """Release the active pairs whose force pulls near convergence (unless they have switched
+    ``KEEP_FLIPS`` times in the step); returns how many. A released pair acts again where it
+    pushes (another rod may press its segments together once it has let go)."""
     released = 0
     for q in range(m):
         p = plist[q]
-        if ps[p, PS_SET] == ACTIVE and pp[p, PP_FN] < 0.0:
+        if ps[p, PS_SET] == ACTIVE and pp[p, PP_FN] < 0.0 and ps[p, PS_FLIPS] < KEEP_FLIPS:
             ps[p, PS_SET] = INACTIVE
             released += 1
     return released
