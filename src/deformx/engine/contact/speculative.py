@@ -25,8 +25,9 @@ when a point ended its step sliding (which also selects ``mu_k`` over ``mu_s`` f
 
 Within a step a plane that has pushed stays active, its force law applied even where it would
 pull, until Newton is near convergence (an update within ``RELEASE_NEAR`` tolerances); planes
-that pull then are released (and released ones pressed in since re-engaged) and the solve goes on (an active set, so that contacts at the edge of
-touching cannot switch at every iterate; see ``switch_active``).
+that pull then are released (and released ones pressed in since re-engaged) and the solve goes
+on (an active set, so that contacts at the edge of touching cannot switch at every iterate; see
+``switch_active``).
 
 Per query slot (node ``i``, element ``N + e``) up to ``SP_K`` planes from different sources
 (planes of the world, then colliders): ``sp_i[q, k]`` = (source, anchored, sliding at the last

@@ -77,7 +77,7 @@ EXTEND, EXTEND_RATE = 4, 0.8
 # Contacts that pull are let go (and released ones pressed in since re-engaged) once an update
 # is within this many tolerances, not only at convergence: each round of releases then costs
 # the iterations from there, not the slow tail to the tolerance as well (pile of ropes 13.1 ->
-# 9.5 iterations per step at 1e-2, rope on a cylinder 6.5 -> 4.4).
+# 9.5 iterations per step at 1e-2, rope on a cylinder 6.5 -> 4.4; docs/contact.md).
 RELEASE_NEAR = 1000.0
 _DEBUG = False
 
