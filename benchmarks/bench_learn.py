@@ -31,6 +31,7 @@ from rich.table import Table
 SOFT = dict(stretch_modulus=None, shear_modulus=None)  # the authors' rope: E everywhere
 ROPES = {
     "default (BDF2 1 x 2 ms; before 3529659: backward Euler 4 x 0.5 ms)": dict(),
+    "default, twist-stiff (G_t = G = 6.7e6 Pa, before 71227bd)": dict(twist_modulus=6.7e6),
     "backward Euler 4 x 0.5 ms": dict(order=1, rope_dt=5e-4),
     "backward Euler 1 x 2 ms": dict(order=1, rope_dt=2e-3),
     "authors' soft rope, explicit 4 x 0.5 ms": dict(SOFT, integrator="verlet", rope_dt=5e-4),

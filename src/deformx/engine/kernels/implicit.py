@@ -765,13 +765,13 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                           and near_rounds < (MAX_PAIR_ROUNDS if m > 0 else MAX_SET_ROUNDS))
             if done_iterating or near_round:
                 released = 0
-                if (near_rounds < MAX_SET_ROUNDS if near_round else set_rounds < MAX_SET_ROUNDS
-                        ) and sources:
+                rounds = near_rounds if near_round else set_rounds
+                if rounds < MAX_SET_ROUNDS and sources:
                     for k in range(K):
                         n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
                         released += release_pulling(n0, nn, e0, ne, pos.shape[0], rd.sp_i,
                                                     rd.sp_f)
-                if (near_round or set_rounds < MAX_PAIR_ROUNDS) and m > 0:
+                if rounds < MAX_PAIR_ROUNDS and m > 0:
                     released += release_pulling_pairs(plist, m, pp, ps)
                 if released > 0:
                     # Contacts that pull were released: solve again without them.
