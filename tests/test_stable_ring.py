@@ -15,7 +15,7 @@ def test_ring_dropped_on_the_ground_comes_to_rest_at_large_steps():
     rod = world.add_rod(dx.Rod.from_points(ring, closed=True, radius=0.003, density=1200.0,
                                            youngs_modulus=5e7, damping=2.0))
     world.add_plane()
-    world.run(2.0)
+    world.run(3.0)  # (after 2 s it may still settle by ~10 um in a second)
     start = rod.positions.copy()
     world.run(1.0)
     # At rest to what Newton resolves: its tolerance is an update of 1e-4 element lengths per
@@ -31,4 +31,4 @@ def test_ring_dropped_on_the_ground_comes_to_rest_at_large_steps():
     radii = np.linalg.norm(rod.positions[:, :2] - rod.positions[:, :2].mean(axis=0), axis=1)
     assert np.allclose(radii, 0.2, rtol=0.03)
     assert np.isclose(world.contact_forces(rod).sum(axis=0)[2], rod.mass * 9.81, rtol=1e-3)
-    assert world.solver_stats()["steps"] == 300
+    assert world.solver_stats()["steps"] == 400

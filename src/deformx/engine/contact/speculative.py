@@ -44,7 +44,7 @@ import math
 from numba import njit
 
 from ..kernels.bundles import (
-    N_CONTACT_FORCE, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS,
+    N_CONTACT_FORCE, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS, R_COUPLED,
 )
 from .plane import PL_MUK, PL_MUS, V_OUT, plane_penalty
 from .segments import (
@@ -75,6 +75,9 @@ Y_SLIDE, Y_ANCHOR = 3.0, 1.0
 # finer than Newton resolves, and friction would then switch direction between iterates.
 STICK_ZONE = 1e-6
 MARGIN = 2.0  # the speculative margin is this many times the step's relative travel
+# The friction's coupling to the normal force enters the Newton matrix where it is at least
+# this fraction of mu times the normal stiffness (sliding, not sticking).
+MIN_COUPLING = 0.01
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -362,11 +365,20 @@ def _add_contact_K(el_K, e, q, wn, wt, kn, ka, kb, n, sh):
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def _add_coupling(el_K, e, q, w, u, n):
+    """Add ``w u n^T`` to the coupling block ``q`` (3 + a-a, a-b, b-a, b-b) of element ``e``."""
+    for i in range(3):
+        for j in range(3):
+            el_K[e, 3 + q, i, j] += w * u[i] * n[j]
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i, sp_f, commit,
                  stats) -> int:
     """Add the contact forces of rod ``r``'s slot planes at the iterate (positions ``X``,
     velocities ``V``; ``Xs`` the step start), their stiffness into ``el_K`` (per element: node
-    blocks a-a, b-a, b-b) and, with ``commit`` (accepted step), store the friction anchors and
+    blocks a-a, b-a, b-b; then the friction's coupling to the normal force, counted in
+    ``r1[R_COUPLED]``) and, with ``commit`` (accepted step), store the friction anchors and
     the colliders' reactions; returns the contact count. ``stats[5]`` keeps the deepest start
     penetration (m) of a contact deeper than one step resolves and 20 % of the radius."""
     mass, node_kmin, node_radius = rd.n1[N_MASS], rd.n1[N_NODE_KMIN], rd.n1[N_NODE_RADIUS]
@@ -379,6 +391,7 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
     if has_cols:  # (the caller clears the reactions in cols.wrench[r])
         pose, twist, par = cols.pose[r], cols.twist[r], cols.par
     count = 0
+    coupled = 0
     for k in range(_n_queries(nn, ne, cols)):
         node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
         for j in range(SP_K):
@@ -420,6 +433,7 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
             sh = (0.0, 0.0, 0.0)
             ta = wa
             sa = wb
+            cu = 0.0  # d|f_t| / d(penetration) (N/m), while the bound follows the normal force
             if mu_s > 0.0 or mu_k > 0.0:
                 u = (wa * V[a, 0] + wb * V[b, 0], wa * V[a, 1] + wb * V[b, 1],
                      wa * V[a, 2] + wb * V[b, 2])
@@ -464,6 +478,10 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                         # then overshoot the stick point and flip the friction every iterate.
                         kb = kt * th / y
                         ka = max(kt * (1.0 - th * th), kb)
+                        if frozen < 0.0:
+                            # |f_t| = mu N tanh(|s| k / (mu N)): d|f_t|/dN = mu (th - y (1 - th^2))
+                            cu = mu * (th - y * (1.0 - th * th))
+                            cu = cu * (kc + cc / h) if cu >= MIN_COUPLING * mu else 0.0
                         if commit:
                             sliding = y > Y_SLIDE
                             sp_i[slot, j, SP_SLIDING] = 1 if sliding else 0
@@ -492,15 +510,27 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                 rq = (q[0] - pose[c, 0, 3], q[1] - pose[c, 1, 3], q[2] - pose[c, 2, 3])
                 _add_reaction(cols.wrench, r, c, rq, f)
             kn = kc + cc / h
+            # The friction force -|f_t| sh grows with the penetration: -d f / dx carries
+            # u n^T with u = -cu sh (nonsymmetric; rows weighted as the friction, columns as
+            # the penetration).
+            u = (-cu * sh[0], -cu * sh[1], -cu * sh[2])
             if node:  # the node's diagonal block lives in an adjacent element's a-a / b-b
-                if k < ne:
-                    _add_contact_K(el_K, e0 + k, 0, 1.0, 1.0, kn, ka, kb, n, sh)
-                else:
-                    _add_contact_K(el_K, e0 + ne - 1, 2, 1.0, 1.0, kn, ka, kb, n, sh)
+                ea, qa = (e0 + k, 0) if k < ne else (e0 + ne - 1, 2)
+                _add_contact_K(el_K, ea, qa, 1.0, 1.0, kn, ka, kb, n, sh)
+                if cu != 0.0:
+                    _add_coupling(el_K, ea, 0 if qa == 0 else 3, 1.0, u, n)
             else:
                 _add_contact_K(el_K, e, 0, wa * wa, ta * ta, kn, ka, kb, n, sh)
                 _add_contact_K(el_K, e, 1, wa * wb, ta * sa, kn, ka, kb, n, sh)
                 _add_contact_K(el_K, e, 2, wb * wb, sa * sa, kn, ka, kb, n, sh)
+                if cu != 0.0:
+                    _add_coupling(el_K, e, 0, ta * wa, u, n)
+                    _add_coupling(el_K, e, 1, ta * wb, u, n)
+                    _add_coupling(el_K, e, 2, sa * wa, u, n)
+                    _add_coupling(el_K, e, 3, sa * wb, u, n)
+            if cu != 0.0:
+                coupled += 1
+    rd.r1[R_COUPLED][r] = coupled
     return count
 
 

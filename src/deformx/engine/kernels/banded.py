@@ -209,3 +209,127 @@ def block_solve(A, nb, x) -> None:
         x[I, 0], x[I, 1], x[I, 2] = r
         n2 = n1
         n1 = r
+
+
+# ---------------------------------------------------------------- nonsymmetric band (block LU)
+# A Newton matrix made nonsymmetric by friction (the friction bound mu N follows the normal
+# force, a coupling the symmetric matrix leaves out) is held as the lower blocks above plus the
+# upper ones: ``A[I, 3]`` the block (I - 1, I), ``A[I, 4]`` the block (I - 2, I), and a full
+# diagonal block ``A[I, 0]``. LU without pivoting: the matrix is the symmetric positive definite
+# one plus a small coupling, so its pivots stay near the Cholesky ones.
+LU_UPPER = 3  # A[I, LU_UPPER + d - 1] holds the block (I - d, I)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _mul(x, y):
+    """x @ y (3x3, row-major tuples)."""
+    return (x[0] * y[0] + x[1] * y[3] + x[2] * y[6], x[0] * y[1] + x[1] * y[4] + x[2] * y[7],
+            x[0] * y[2] + x[1] * y[5] + x[2] * y[8],
+            x[3] * y[0] + x[4] * y[3] + x[5] * y[6], x[3] * y[1] + x[4] * y[4] + x[5] * y[7],
+            x[3] * y[2] + x[4] * y[5] + x[5] * y[8],
+            x[6] * y[0] + x[7] * y[3] + x[8] * y[6], x[6] * y[1] + x[7] * y[4] + x[8] * y[7],
+            x[6] * y[2] + x[7] * y[5] + x[8] * y[8])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _sub_ab(m, x, y):
+    """m - x @ y (3x3, row-major tuples)."""
+    p = _mul(x, y)
+    return (m[0] - p[0], m[1] - p[1], m[2] - p[2], m[3] - p[3], m[4] - p[4], m[5] - p[5],
+            m[6] - p[6], m[7] - p[7], m[8] - p[8])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _pivot_inverse(m):
+    """(ok, inverse) of a 3x3 pivot block; ok is False unless its leading principal minors are
+    positive, i.e. the scalar pivots of the whole matrix are: for a symmetric matrix the test
+    the Cholesky factorisation makes, so an indefinite Newton matrix is caught the same way.
+    (The symmetric part is no test: friction's coupling ``u n^T`` makes it indefinite.)"""
+    c00 = m[4] * m[8] - m[5] * m[7]
+    c01 = m[5] * m[6] - m[3] * m[8]
+    c02 = m[3] * m[7] - m[4] * m[6]
+    det = m[0] * c00 + m[1] * c01 + m[2] * c02
+    if not (m[0] > 0.0 and m[0] * m[4] - m[1] * m[3] > 0.0 and det > 0.0):
+        return False, m
+    inv = 1.0 / det
+    return True, (c00 * inv, (m[2] * m[7] - m[1] * m[8]) * inv, (m[1] * m[5] - m[2] * m[4]) * inv,
+                  c01 * inv, (m[0] * m[8] - m[2] * m[6]) * inv, (m[2] * m[3] - m[0] * m[5]) * inv,
+                  c02 * inv, (m[1] * m[6] - m[0] * m[7]) * inv, (m[0] * m[4] - m[1] * m[3]) * inv)
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def expand_upper(A, nb) -> None:
+    """Make the symmetric band ``A`` (lower blocks, lower triangles of the diagonal ones) a
+    full one: diagonal blocks mirrored, upper blocks the transposes of the lower ones."""
+    for I in range(nb):
+        for i in range(3):
+            for j in range(i + 1, 3):
+                A[I, 0, i, j] = A[I, 0, j, i]
+        for d in range(1, BLOCK_BAND + 1):
+            for i in range(3):
+                for j in range(3):
+                    A[I, LU_UPPER + d - 1, i, j] = A[I, d, j, i] if I >= d else 0.0
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def block_lu(A, nb) -> int:
+    """In-place block LU (``L`` unit lower, no pivoting) of the full band ``A`` (see
+    ``LU_UPPER``); 0, or 1 + the first block row with a scalar pivot <= 0 (see
+    ``_pivot_inverse``). Afterwards ``A[I, 1]``, ``A[I, 2]`` hold L[I, I-1], L[I, I-2], ``A[I, 0]`` the
+    inverse pivot and ``A[I, 3]``, ``A[I, 4]`` the factor's U[I-1, I], U[I-2, I]."""
+    zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    pinv2 = pinv1 = l1 = l2 = zero
+    for I in range(nb):
+        p = _load(A, I, 0)
+        if I >= 2:
+            l2 = _mul(_load(A, I, 2), pinv2)
+            store_block(A, I, 2, l2)
+            p = _sub_ab(p, l2, _load(A, I, LU_UPPER + 1))
+        if I >= 1:
+            a1 = _load(A, I, 1)
+            if I >= 2:
+                a1 = _sub_ab(a1, l2, _load(A, I - 1, LU_UPPER))
+            l1 = _mul(a1, pinv1)
+            store_block(A, I, 1, l1)
+            p = _sub_ab(p, l1, _load(A, I, LU_UPPER))
+        ok, pinv = _pivot_inverse(p)
+        if not ok:
+            return I + 1
+        store_block(A, I, 0, pinv)
+        if I >= 1 and I + 1 < nb:  # U[I, I+1] = A[I, I+1] - L[I, I-1] U[I-1, I+1]
+            store_block(A, I + 1, LU_UPPER, _sub_ab(_load(A, I + 1, LU_UPPER), l1,
+                                                    _load(A, I + 1, LU_UPPER + 1)))
+        pinv2 = pinv1
+        pinv1 = pinv
+    return 0
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def block_lu_solve(A, nb, x) -> None:
+    """Solve ``L U x = b`` in place (``x`` holds b, shape (nb, 3)) with ``block_lu``'s factor."""
+    p2 = (0.0, 0.0, 0.0)
+    p1 = (0.0, 0.0, 0.0)
+    for I in range(nb):
+        y = (x[I, 0], x[I, 1], x[I, 2])
+        if I >= 2:
+            y = _sub_ax(y, _load(A, I, 2), p2)
+        if I >= 1:
+            y = _sub_ax(y, _load(A, I, 1), p1)
+        x[I, 0], x[I, 1], x[I, 2] = y
+        p2 = p1
+        p1 = y
+    n1 = (0.0, 0.0, 0.0)  # x_{I+1}
+    n2 = (0.0, 0.0, 0.0)  # x_{I+2}
+    for I in range(nb - 1, -1, -1):
+        r = (x[I, 0], x[I, 1], x[I, 2])
+        if I + 1 < nb:
+            r = _sub_ax(r, _load(A, I + 1, LU_UPPER), n1)
+        if I + 2 < nb:
+            r = _sub_ax(r, _load(A, I + 2, LU_UPPER + 1), n2)
+        pinv = _load(A, I, 0)
+        xi = (pinv[0] * r[0] + pinv[1] * r[1] + pinv[2] * r[2],
+              pinv[3] * r[0] + pinv[4] * r[1] + pinv[5] * r[2],
+              pinv[6] * r[0] + pinv[7] * r[1] + pinv[8] * r[2])
+        x[I, 0], x[I, 1], x[I, 2] = xi
+        n2 = n1
+        n1 = xi

@@ -50,7 +50,8 @@ ROD_ARRAYS = (
     ('n1', 'f', (4, 'N'), ('pen_off', 'mass', 'node_radius', 'node_kmin'), 1),
     ('e1', 'f', (5, 'E'), ('pair_off', 'rest_len', 'seg_radius', 'dil', 'scr_edot'), 1),
     ('v1', 'f', (1, 'V'), ('rest_vor',), 0),
-    ('r1', 'f', (7, 'R'), ('h_prev', 'rate', 'contacts', 'decay', 'nu', 'tau', 'times'), 3),
+    ('r1', 'f', (8, 'R'), ('h_prev', 'rate', 'contacts', 'decay', 'nu', 'tau', 'times',
+                           'coupled'), 3),
     # The stable integrator's contact planes per query slot (see contact/speculative.py).
     ('sp_i', 'i', ('Q', 2, 5), None, 1),
     ('ei', 'i', (7, 'E'), ('seg_a', 'seg_b', 'seg_rod', 'seg_k', 'seg_ne', 'seg_closed',
@@ -59,14 +60,16 @@ ROD_ARRAYS = (
     ('pair_state', 'i', (4,), None, 1),
     ('stats', 'f', ('R', 6), None, 0),
     ('sp_f', 'f', ('Q', 2, 16), None, 1),
-    ('el_K', 'f', ('E', 3, 3, 3), None, 0),
+    # Per element: contact stiffness blocks a-a, b-a, b-b (symmetric), then the friction's
+    # coupling to the normal force a-a, a-b, b-a, b-b (nonsymmetric; row-column).
+    ('el_K', 'f', ('E', 7, 3, 3), None, 0),
     ('status', 'i', ('R', 3), None, 0),
     ('segs', 'i', ('S',), None, 0),
     ('nodes', 'i', ('M',), None, 0),
     # The stable integrator's Newton system, per block (a rod's nodes and elements from
     # node0 + elem0; B = 0 for explicit worlds): matrix, residual, prescribed flags. Kept here
     # rather than allocated per call: ~8 us less per step() of a one-rod world.
-    ('sys_A', 'f', ('B', BLOCK_BAND + 1, 3, 3), None, 0),
+    ('sys_A', 'f', ('B', 2 * BLOCK_BAND + 1, 3, 3), None, 0),
     ('sys_rhs', 'f', ('B', 3), None, 0),
     ('sys_fixed', 'i', ('B',), None, 0),
 )
@@ -80,7 +83,7 @@ V_B, V_REST_KAPPA, V_KAPPA, V_COUPLE, V_SCR_C, V_SCR_X = 0, 1, 2, 3, 4, 5
 N_PEN_OFF, N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2, 3
 E_PAIR_OFF, E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3, 4
 V_REST_VOR = 0
-R_H_PREV, R_RATE, R_CONTACTS, R_DECAY, R_NU, R_TAU, R_TIMES = 0, 1, 2, 3, 4, 5, 6
+R_H_PREV, R_RATE, R_CONTACTS, R_DECAY, R_NU, R_TAU, R_TIMES, R_COUPLED = 0, 1, 2, 3, 4, 5, 6, 7
 E_SEG_A, E_SEG_B, E_SEG_ROD, E_SEG_K, E_SEG_NE, E_SEG_CLOSED, E_EXCLUDED = 0, 1, 2, 3, 4, 5, 6
 R_NODE0, R_ELEM0, R_VOR0, R_NE, R_CLOSED, R_GROUP = 0, 1, 2, 3, 4, 5
 ENV = (
