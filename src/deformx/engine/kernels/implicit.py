@@ -10,7 +10,8 @@ by Newton iterations on node displacements and element rotation vectors. The New
 the mass/inertia term, the exact Hessian of the stretch-shear energy (quadratic in positions at
 fixed frames) including its stress (geometric) terms, a Gauss-Newton bend-twist Hessian and the
 contact stiffnesses. In the per-rod order x0, phi0, x1, phi1, ... it is block-pentadiagonal and
-factors by banded Cholesky in O(n). Every stiff term is implicit, so the step is stable for any
+factors by banded Cholesky in O(n) (by block LU when sliding friction's coupling to the normal
+force makes it nonsymmetric). Every stiff term is implicit, so the step is stable for any
 stiffness; the numerical damping is backward Euler's: a mode of angular frequency w keeps
 1/sqrt(1 + (w h)^2) of its amplitude per step.
 
