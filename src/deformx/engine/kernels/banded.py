@@ -275,8 +275,9 @@ def expand_upper(A, nb) -> None:
 def block_lu(A, nb) -> int:
     """In-place block LU (``L`` unit lower, no pivoting) of the full band ``A`` (see
     ``LU_UPPER``); 0, or 1 + the first block row with a scalar pivot <= 0 (see
-    ``_pivot_inverse``). Afterwards ``A[I, 1]``, ``A[I, 2]`` hold L[I, I-1], L[I, I-2], ``A[I, 0]`` the
-    inverse pivot and ``A[I, 3]``, ``A[I, 4]`` the factor's U[I-1, I], U[I-2, I]."""
+    ``_pivot_inverse``). Afterwards ``A[I, 1]``, ``A[I, 2]`` hold L[I, I-1], L[I, I-2],
+    ``A[I, 0]`` the inverse pivot and ``A[I, 3]``, ``A[I, 4]`` the factor's U[I-1, I],
+    U[I-2, I]."""
     zero = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     pinv2 = pinv1 = l1 = l2 = zero
     for I in range(nb):

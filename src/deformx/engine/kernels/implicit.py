@@ -269,10 +269,12 @@ def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
             for j in range(6):
                 cols.wrench[r, c, j] = 0.0
     if not near:
-        rd.r1[R_COUPLED][r] = 0.0
         return 0
+    # The friction coupling blocks only where the last evaluation wrote some (most contacts
+    # stick or are frictionless; ``r1[R_COUPLED]`` counts them).
+    n_blocks = 7 if rd.r1[R_COUPLED][r] > 0.0 else 3
     for e in range(e0, e0 + ne):
-        for q in range(7):
+        for q in range(n_blocks):
             for i in range(3):
                 for j in range(3):
                     el_K[e, q, i, j] = 0.0
@@ -689,6 +691,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 # iteration (a rope dragged over a kerb: 9.2 -> 6.2 iterations per step).
                 # Only near the solution (far from it, at an impact, the coupling's linearisation
                 # misleads more than it helps) and, should that matrix not factor, without it.
+                # (R_COUPLED is this iteration's count: the rod is near, its contacts evaluated)
                 couple = (near[k] != 0.0 and m == 0 and rd.r1[R_COUPLED][r] > 0.0
                           and update <= COUPLE_NEAR)
                 for attempt in range(3):
