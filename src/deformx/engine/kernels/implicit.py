@@ -796,8 +796,10 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 r = isl[k]
                 if it >= 2 and prev_upd[k] > 0.0 and previous > 0.0 and previous < math.inf:
                     rate[r] = max(0.3 * rate[r], upd[k] / prev_upd[k])
+                # (not after a BDF2 step's Gauss-Newton first iteration: what is left after
+                # it is not the contraction rate times the update)
                 early = (early and upd[k] <= EARLY_LIMIT * tol and rate[r] * upd[k] <= tol
-                         and (calm[k] != 0.0 or not touching))
+                         and (calm[k] != 0.0 or not touching) and hb[k] == hs)
             # (the rate against the update Newton proposed last, not the damped part applied:
             # after a damped iteration the next update is the other half of the same one)
             if (it == budget and update <= EXTEND_RATE * max(previous, proposed_prev)
