@@ -169,18 +169,20 @@ class HitTargetBatch:
         d = self.backend.data
         q, v = self._qpos_i[i], self._dof_i[i]
         rod = self.rods[i].get_state() if self.rods else None
+        held = self.sim.held_wrench(f"e{i}_tool_tip") if self.sim is not None else None
         b = self._body_i[i]  # the co-simulation's wrench on the stick acts through these
         return (d.qpos[q].copy(), d.qvel[v].copy(), d.qacc_warmstart[v].copy(),
                 d.qfrc_applied[v].copy(), d.xfrc_applied[b].copy(),
-                d.ctrl[self._ctrl[i]].copy(), rod)
+                d.ctrl[self._ctrl[i]].copy(), rod, held)
 
     def _load(self, i: int, saved: tuple) -> None:
         d = self.backend.data
         q, v, b = self._qpos_i[i], self._dof_i[i], self._body_i[i]
         (d.qpos[q], d.qvel[v], d.qacc_warmstart[v], d.qfrc_applied[v], d.xfrc_applied[b],
-         d.ctrl[self._ctrl[i]], rod) = saved
+         d.ctrl[self._ctrl[i]], rod, held) = saved
         if rod is not None:
             self.rods[i].set_state(rod)
+            self.sim.set_held_wrench(f"e{i}_tool_tip", held)
 
     def _full_state(self) -> tuple:
         import mujoco
@@ -189,15 +191,17 @@ class HitTargetBatch:
         spec = mujoco.mjtState.mjSTATE_INTEGRATION
         buf = np.empty(mujoco.mj_stateSize(m, spec))
         mujoco.mj_getState(m, d, buf, spec)
-        return buf, self.sim.world.get_state()
+        held = self.sim.held_wrenches
+        return buf, self.sim.world.get_state(), None if held is None else held.copy()
 
     def _restore_full(self, saved: tuple) -> None:
         import mujoco
 
-        buf, world = saved
+        buf, world, held = saved
         mujoco.mj_setState(self.backend.model, self.backend.data, buf,
                            mujoco.mjtState.mjSTATE_INTEGRATION)
         self.sim.world.set_state(world)
+        self.sim.held_wrenches = None if held is None else held.copy()
 
     def set_rope(self, i: int, params: dict) -> None:
         """Give copy ``i``'s rope new parameters (``youngs_modulus``, ``density``,
