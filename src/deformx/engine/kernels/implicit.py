@@ -699,8 +699,8 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     # On a BDF2 step's first iteration the stress terms (of the predictor,
                     # extrapolated from two steps) mislead more than they help: Gauss-Newton
                     # there (the hit-target rope under random commands: 3.2 -> 2.5 iterations
-                    # per step, a third of the halvings; on backward-Euler steps it cost a
-                    # rope dragged over a kerb 9 %, so not there).
+                    # per step and, with the extension's rate below, a tenth of the halvings;
+                    # on backward-Euler steps it cost a rope dragged over a kerb 9 %).
                     geometric = attempt == 0 and (it > 1 or hb[k] == hs)
                     lu[k] = 1.0 if couple and attempt < 2 else 0.0
                     if attempt == 2 and not couple:
