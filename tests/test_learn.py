@@ -345,6 +345,33 @@ def test_sampled_rollouts_are_the_policys_own_episodes_and_play_back_exactly():
         sample_rollouts(policy, cfg, n=0)
 
 
+def test_replayed_actions_give_the_sampled_episodes_and_robust_choice_takes_the_worst_case():
+    """replay_actions on the training rope gives each sampled episode's d_min again (one
+    batch, each over its own steps); on other ropes other values; "robust" selection's score
+    is the worst over the ropes, and TrainSettings checks its arguments."""
+    from dataclasses import replace
+
+    from deformx.learn.train import ROBUST_MODELS, TrainSettings, replay_actions, sample_rollouts
+
+    cfg = HitTargetConfig(target=(0.0, 1.0, 0.6), settle_time=0.2, episode_steps=100)
+
+    def policy(obs):
+        obs = np.atleast_2d(obs)
+        return np.tanh(obs[:, 3:6] + 0.5 * obs[:, 8:9])
+
+    noisy = sample_rollouts(policy, cfg, n=4, std=0.7, seed=3)
+    again = replay_actions(noisy["actions"], cfg)
+    assert again == pytest.approx(noisy["d_min"], abs=1e-9)
+    finer = replay_actions(noisy["actions"], replace(cfg, **ROBUST_MODELS[3]))
+    assert np.all(np.isfinite(finer)) and np.abs(finer - again).max() > 1e-4
+    with pytest.raises(ValueError, match="select"):
+        TrainSettings(select="median")
+    with pytest.raises(ValueError, match="cosserat"):
+        TrainSettings(select="robust", task={"rope": "capsule"})
+    with pytest.raises(ValueError, match="no action"):
+        replay_actions([], cfg)
+
+
 def test_train_command_writes_a_run_directory(tmp_path):
     pytest.importorskip("stable_baselines3")
     import json
@@ -373,9 +400,11 @@ def test_train_command_writes_a_run_directory(tmp_path):
     res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
                               "1024", "--envs", "2", "--rope-dt", "0.002", "--out",
                               str(tmp_path / "norm"), "--normalize", "--no-video",
-                              "--no-progress"])  # resumes with its statistics
-    assert res.exit_code == 0, res.output
-    assert json.loads((tmp_path / "norm" / "summary.json").read_text())["timesteps"] == 1024
+                              "--no-progress", "--select", "robust", "--rollouts", "4"])
+    assert res.exit_code == 0, res.output  # resumed with its statistics, chosen robustly
+    summary = json.loads((tmp_path / "norm" / "summary.json").read_text())
+    assert summary["timesteps"] == 1024 and summary["select"] == "robust"
+    assert summary["worst_d_min"] >= summary["d_min"] - 1e-9
     res = runner.invoke(app, ["train", "hit-apple"])
     assert res.exit_code != 0 and "hit-target" in res.output
     res = runner.invoke(app, ["train", "hit-target", "--rope", "chain", "--out", str(out)])

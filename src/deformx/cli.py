@@ -448,6 +448,7 @@ def train(
     normalize: bool = typer.Option(False, "--normalize", help="Normalise observations and rewards (SB3's VecNormalize)."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
     rollouts: int = typer.Option(64, "--rollouts", min=1, help="Trajectories the trained policy generates (the deterministic one and the rest with its exploration noise); the best is exported."),
+    select: str = typer.Option("best", "--select", help="best: least d_min on the training rope (the paper); robust: least worst d_min over it and finer-step, perturbed and 40-element ropes (Cosserat only)."),
 ) -> None:
     """Train PPO (stable-baselines3) on a task; resumable. Writes checkpoints, episodes.csv,
     TensorBoard logs (tb/), learning_curve.png, best_rollout.csv (the joint commands a UR5e
@@ -466,7 +467,8 @@ def train(
         overrides["rope_dt"] = rope_dt
     try:
         settings = TrainSettings(total_steps=steps, num_envs=envs, seed=seed, video=video,
-                                 normalize=normalize, rollouts=rollouts, task=overrides)
+                                 normalize=normalize, rollouts=rollouts, select=select,
+                                 task=overrides)
         from .learn.task import HitTargetConfig
 
         HitTargetConfig(**overrides)  # bad task numbers fail here, before any work
@@ -475,8 +477,8 @@ def train(
     t0 = time.perf_counter()
     summary = run_training(out, settings, resume=resume, progress=progress)
     console.print(f"[bold]DeformX train {task}[/bold]: {summary['timesteps']} environment steps "
-                  f"in {time.perf_counter() - t0:.1f} s; best of {summary['rollouts']} "
-                  f"rollouts d_min {100 * summary['d_min']:.1f} cm (3D "
+                  f"in {time.perf_counter() - t0:.1f} s; {summary['select']} of "
+                  f"{summary['rollouts']} rollouts d_min {100 * summary['d_min']:.1f} cm (3D "
                   f"{100 * summary['d_min_3d']:.1f} cm; deterministic "
                   f"{100 * summary['d_min_deterministic']:.1f} cm)")
     console.print(f"outputs in {escape(str(out))}: policy.zip, checkpoints/, episodes.csv, tb/, "
