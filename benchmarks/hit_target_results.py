@@ -52,6 +52,8 @@ def main() -> None:
     parser.add_argument("--ropes", nargs="+", default=["cosserat", "capsule"])
     parser.add_argument("--out", type=Path, default=Path("runs"))
     parser.add_argument("--normalize", action="store_true", help="VecNormalize in training")
+    parser.add_argument("--rollouts", type=int, default=64,
+                        help="trajectories each trained policy generates to choose from")
     parser.add_argument("--select", default="best", choices=["best", "robust"],
                         help="which sampled trajectory is exported (TrainSettings.select; "
                              "robust: Cosserat rows only)")
@@ -76,7 +78,8 @@ def main() -> None:
                 select = args.select if rope == "cosserat" else "best"
                 summary = train(out, TrainSettings(total_steps=args.steps, num_envs=args.envs,
                                                    normalize=args.normalize, seed=seed,
-                                                   video=False, select=select, task=task),
+                                                   video=False, select=select,
+                                                   rollouts=args.rollouts, task=task),
                                 progress=False)
                 rank = summary["worst_d_min"] if select == "robust" else summary["d_min"]
                 runs.append((rank, seed, out, summary, time.perf_counter() - t0))

@@ -239,7 +239,7 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
     summary = {"timesteps": int(model.num_timesteps), "d_min": result["d_min"],
                "d_min_3d": result["d_min_3d"], "success": result["success"],
                "rollouts": settings.rollouts, "best_rollout": best, "select": settings.select,
-               "worst_d_min": float(score[best]),
+               "worst_d_min": max(float(score[best]), result["d_min"]),
                "d_min_deterministic": float(samples["d_min"][0]),
                "d_min_sampled_median": float(np.median(samples["d_min"])),
                "successes_sampled": int(samples["success"].sum()),
