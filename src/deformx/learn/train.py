@@ -337,12 +337,11 @@ def replay_actions(actions: list, config: HitTargetConfig, seed: int = 0) -> np.
     batch = HitTargetBatch(cfg, n, params=[with_params(cfg, rng) for _ in range(n)])
     d_min = np.full(n, np.inf)
     failed = np.zeros(n, dtype=bool)
-    a = np.zeros((n, len(cfg.active_joints)))
-    for k in range(int(steps.max())):
+    padded = np.zeros((int(steps.max()), n, len(cfg.active_joints)))  # zeros: commands hold
+    for i, a in enumerate(actions):
+        padded[:len(a), i] = a
+    for k, a in enumerate(padded):
         live = steps > k
-        for i in np.flatnonzero(live):
-            a[i] = actions[i][k]
-        a[~live] = 0.0  # commands hold
         _, _, _, _, diverged = batch.step(a)
         failed |= live & diverged
         d_min = np.where(live, np.minimum(d_min, batch.d), d_min)
