@@ -39,7 +39,6 @@ import numpy as np
 
 TARGETS = {"high": (0.0, 2.0, 2.3), "mid": (0.0, 2.0, 1.5), "low": (0.0, 1.7, 0.5)}
 PAPER = {"high": (4.2, 4.9), "mid": (1.4, 4.4), "low": (3.3, 4.3)}  # cm: Cosserat, capsule
-PERTURB = {"youngs_modulus": 0.1, "density": 0.05, "damping": 0.2}
 REF_CHECK_DTS = (1e-4, 5e-5, 2.5e-5)  # s: the reference rope's step check (--ref-check)
 
 
@@ -72,7 +71,8 @@ def main() -> None:
     args = parser.parse_args()
     from deformx.engine.rod import explicit_time_step
     from deformx.learn.task import HitTargetConfig
-    from deformx.learn.train import TrainSettings, load_trajectory, replay, train
+    from deformx.learn.train import (REPLAY_PERTURBATION, TrainSettings, load_trajectory,
+                                     replay, train)
 
     rows = []
     for name in args.targets:
@@ -94,7 +94,7 @@ def main() -> None:
             _, seed, out, summary, wall = min(runs, key=lambda r: r[0])
             _, q = load_trajectory(out / "best_rollout.csv")
             cfg = HitTargetConfig(**task)
-            same = replay(q, cfg, n=args.replays, perturb=PERTURB, seed=1)
+            same = replay(q, cfg, n=args.replays, perturb=REPLAY_PERTURBATION, seed=1)
             limit = explicit_time_step(cfg.rope_length / args.ref_elements, cfg.radius,
                                        cfg.density, max(cfg.youngs_modulus,
                                                         cfg.stretch_modulus or 0.0),
@@ -105,7 +105,7 @@ def main() -> None:
             # backward Euler: the reference of every table so far (docs/learning.md)
             ref_cfg = replace(cfg, rope="cosserat", integrator=args.ref_integrator,
                               n_elements=args.ref_elements, rope_dt=ref_dt, order=1)
-            ref = replay(q, ref_cfg, n=args.replays, perturb=PERTURB, seed=2)
+            ref = replay(q, ref_cfg, n=args.replays, perturb=REPLAY_PERTURBATION, seed=2)
             # The reference rope's own step convergence on this trajectory (nominal
             # parameters): a whip's d_min is only as certain as these agree.
             ref_steps = {f"{dt:g}": float(replay(q, replace(ref_cfg, integrator="stable",

@@ -77,11 +77,14 @@ class TrainSettings:
                              "rope='cosserat'")
 
 
+# Relative spread (uniform +-) of the rope parameters for replays on a perturbed rope: the
+# stand-in for the paper's repeats on the real rope, and one of the robust choice's models.
+REPLAY_PERTURBATION = {"youngs_modulus": 0.1, "density": 0.05, "damping": 0.2}
 # The ropes a "robust" choice replays every sampled trajectory on, as HitTargetConfig changes
 # of the training rope: its parameters perturbed, finer steps (BDF2 0.5 ms, backward Euler
 # 0.1 ms) and twice the elements at 0.25 ms. A whip that passes the target in one model only
 # is chaos the sampling happened to catch (docs/learning.md, Results).
-ROBUST_MODELS = ({"randomise": {"youngs_modulus": 0.1, "density": 0.05, "damping": 0.2}},
+ROBUST_MODELS = ({"randomise": REPLAY_PERTURBATION},
                  {"rope_dt": 5e-4}, {"order": 1, "rope_dt": 1e-4},
                  {"n_elements": 40, "rope_dt": 2.5e-4})
 
