@@ -378,8 +378,8 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
     """Add the contact forces of rod ``r``'s slot planes at the iterate (positions ``X``,
     velocities ``V``; ``Xs`` the step start), their stiffness into ``el_K`` (per element: node
     blocks a-a, b-a, b-b; then the friction's coupling to the normal force, counted in
-    ``r1[R_COUPLED]``) and, with ``commit`` (accepted step), store the friction anchors and
-    the colliders' reactions; returns the contact count. ``stats[5]`` keeps the deepest start
+    ``r1[R_COUPLED]``) and, with ``commit`` (accepted step), instead of the stiffness store
+    the friction anchors and the colliders' reactions; returns the contact count. ``stats[5]`` keeps the deepest start
     penetration (m) of a contact deeper than one step resolves and 20 % of the radius."""
     mass, node_kmin, node_radius = rd.n1[N_MASS], rd.n1[N_NODE_KMIN], rd.n1[N_NODE_RADIUS]
     force, contact_force, el_K = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE], rd.el_K
@@ -509,6 +509,8 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                 c = src - n_planes
                 rq = (q[0] - pose[c, 0, 3], q[1] - pose[c, 1, 3], q[2] - pose[c, 2, 3])
                 _add_reaction(cols.wrench, r, c, rq, f)
+            if commit:  # the stiffness is for Newton's matrix only
+                continue
             kn = kc + cc / h
             # The friction force -|f_t| sh grows with the penetration: -d f / dx carries
             # u n^T with u = -cu sh (nonsymmetric; rows weighted as the friction, columns as
@@ -530,7 +532,8 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                     _add_coupling(el_K, e, 3, sa * wb, u, n)
             if cu != 0.0:
                 coupled += 1
-    rd.r1[R_COUPLED][r] = coupled
+    if not commit:  # (the last iteration's count says which coupling blocks to clear)
+        rd.r1[R_COUPLED][r] = coupled
     return count
 
 

@@ -254,7 +254,8 @@ def _assemble(h, ext, rd, nu, kv, geometric, A):
 def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
     """Contact forces of rod ``r``'s slot planes (world planes, meshes, primitives) at the
     iterate into ``force`` and ``contact_force`` (cleared first), their stiffness into
-    ``el_K``; ``commit`` (accepted step) stores the friction anchors and reactions. Returns
+    ``el_K``; ``commit`` (accepted step) stores the friction anchors and reactions instead of
+    the stiffness (nothing reads it). Returns
     the number of active contacts (it changes when they do). ``near``: whether the rod's
     slots hold a plane this step; without one only ``contact_force`` and the colliders'
     reactions are cleared (``el_K`` is neither cleared nor added: a rope swinging above the
@@ -273,6 +274,8 @@ def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
     # The friction coupling blocks only where the last evaluation wrote some (most contacts
     # stick or are frictionless; ``r1[R_COUPLED]`` counts them).
     n_blocks = 7 if rd.r1[R_COUPLED][r] > 0.0 else 3
+    if commit:  # (an accepted step's evaluation adds no stiffness)
+        n_blocks = 0
     for e in range(e0, e0 + ne):
         for q in range(n_blocks):
             for i in range(3):
