@@ -379,8 +379,9 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
     velocities ``V``; ``Xs`` the step start), their stiffness into ``el_K`` (per element: node
     blocks a-a, b-a, b-b; then the friction's coupling to the normal force, counted in
     ``r1[R_COUPLED]``) and, with ``commit`` (accepted step), instead of the stiffness store
-    the friction anchors and the colliders' reactions; returns the contact count. ``stats[5]`` keeps the deepest start
-    penetration (m) of a contact deeper than one step resolves and 20 % of the radius."""
+    the friction anchors and the colliders' reactions; returns the contact count.
+    ``stats[5]`` keeps the deepest start penetration (m) of a contact deeper than one step
+    resolves and 20 % of the radius."""
     mass, node_kmin, node_radius = rd.n1[N_MASS], rd.n1[N_NODE_KMIN], rd.n1[N_NODE_RADIUS]
     force, contact_force, el_K = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE], rd.el_K
     n_planes = planes.shape[0]

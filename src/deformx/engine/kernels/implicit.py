@@ -255,11 +255,11 @@ def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
     """Contact forces of rod ``r``'s slot planes (world planes, meshes, primitives) at the
     iterate into ``force`` and ``contact_force`` (cleared first), their stiffness into
     ``el_K``; ``commit`` (accepted step) stores the friction anchors and reactions instead of
-    the stiffness (nothing reads it). Returns
-    the number of active contacts (it changes when they do). ``near``: whether the rod's
-    slots hold a plane this step; without one only ``contact_force`` and the colliders'
-    reactions are cleared (``el_K`` is neither cleared nor added: a rope swinging above the
-    ground walked and cleared every slot and element at every iteration, ~1/3 of its step)."""
+    the stiffness (nothing reads it). Returns the number of active contacts (it changes when
+    they do). ``near``: whether the rod's slots hold a plane this step; without one only
+    ``contact_force`` and the colliders' reactions are cleared (``el_K`` is neither cleared
+    nor added: a rope swinging above the ground walked and cleared every slot and element at
+    every iteration, ~1/3 of its step)."""
     n0, e0, _, ne, nn, _, _ = ext
     contact_force, el_K = rd.n3[N_CONTACT_FORCE], rd.el_K
     for i in range(n0, n0 + nn):
