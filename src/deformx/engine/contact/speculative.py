@@ -74,6 +74,9 @@ Y_SLIDE, Y_ANCHOR = 3.0, 1.0
 # the spring's own mu N / k is used when larger): a stiff wire's mu N / k can be 0.01 um,
 # finer than Newton resolves, and friction would then switch direction between iterates.
 STICK_ZONE = 1e-6
+# A segment whose middle lies this many radii closer to a shape than its ends' mean gets a
+# plane at its middle (the surface curves under it).
+SAG = 0.1
 MARGIN = 2.0  # the speculative margin is this many times the step's relative travel
 # The friction's coupling to the normal force enters the Newton matrix where it is at least
 # this fraction of mu times the normal stiffness (sliding, not sticking).
@@ -290,6 +293,18 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                                                       reach)
                 if not hit:
                     continue
+                if not node and cols.kind[c] != MESH and abs(s - 0.5) > 0.2:
+                    # On a curved shape a segment's middle can sink in while both its ends
+                    # rest on it (a 1 cm element round a 5 cm cylinder sags 0.25 mm), wherever
+                    # the segment was deepest at the step start: its middle gets a plane too.
+                    pm = (0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2]))
+                    hm, _, sdm, nm, qm = _shape_closest(c, cols.kind[c], pose, cols.par, pm, pm,
+                                                        reach)
+                    sda = _shape_closest(c, cols.kind[c], pose, cols.par, pa, pa, math.inf)[2]
+                    sdb = _shape_closest(c, cols.kind[c], pose, cols.par, pb, pb, math.inf)[2]
+                    if hm and 0.5 * (sda + sdb) - sdm > SAG * radius:
+                        _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c,
+                               sdm - radius, qm, nm, 0.5, pose, n_planes)
                 if not node and (s <= 0.0 or s >= 1.0):
                     continue  # a segment's end: the node carries it
                 _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c, sd - radius,

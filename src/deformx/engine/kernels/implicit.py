@@ -72,6 +72,9 @@ EARLY_LIMIT = 10.0  # one-iteration steps only when the update is within this ma
 MAX_SET_ROUNDS = 4  # contact releases per step before the set is frozen
 MAX_PAIR_ROUNDS = 6  # and for rod-rod pairs (a pile lets go of more, one layer at a time)
 ACCEPT = 1e-2  # an unconverged update above this fraction of an element length is rejected
+# An iterate that stretches an element past max_strain is taken back half its update, up to
+# this many times a step, before the step is halved.
+MAX_BACKTRACK = 4
 MAX_REFINE = 64.0  # a step is halved at most down to dt / MAX_REFINE before giving up
 # Past the iteration cap Newton goes on, up to EXTEND times the cap, while each update is at
 # most EXTEND_RATE times the last (it converges, only slowly: large rotations, contact).
@@ -602,6 +605,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
         for k in range(K):
             n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
             _implied_rates(n0, nn, e0, ne, 1.0 / hb[k], pos, xb, Q, Qb, vel, omega)
+        backtracks = 0
         active = 0
         factored_active = -1
         while it < budget:
@@ -630,6 +634,33 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 for i in range(n0, n0 + nn):
                     for d in range(3):
                         force[i, d] += mass[i] * gravity[d] + fext[i, d]
+            if failed == RUNAWAY_STRETCH and backtracks < MAX_BACKTRACK:
+                # An iterate (or the predictor) stretched an element past max_strain: go back
+                # half of what was applied (a line search) rather than halve the step.
+                backtracks += 1
+                failed = OK
+                for k in range(K):
+                    n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+                    if it == 1:  # (acc / alpha: the last update applied, or the predictor's)
+                        _predicted(n0, nn, e0, ne, pos, xn, Q, Qn, fixed[boff[k]:boff[k + 1]],
+                                   acc[noff[k]:], alpha[eoff[k]:])
+                    for i in range(nn):
+                        for d in range(3):
+                            acc[noff[k] + i, d] *= 0.5
+                            pos[n0 + i, d] -= acc[noff[k] + i, d]
+                    for j in range(ne):
+                        g = eoff[k] + j
+                        for d in range(3):
+                            alpha[g, d] *= 0.5
+                        rotate_directors(Q, e0 + j, -1.0, alpha[g, 0], alpha[g, 1], alpha[g, 2])
+                    _implied_rates(n0, nn, e0, ne, 1.0 / hb[k], pos, xb, Q, Qb, vel, omega)
+                if it == 1:
+                    it = 0  # the predictor, shortened: still the first iterate
+                else:
+                    budget += 1
+                    update *= 0.5
+                    last_update = update
+                continue
             if failed != OK:
                 break
             active = 0
@@ -779,11 +810,14 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 for i in range(nn):
                     g = n0 + i
                     for d in range(3):
+                        acc[noff[k] + i, d] = step_scale * rhs[bo + 2 * i, d]
                         pos[g, d] += step_scale * rhs[bo + 2 * i, d]
                         vel[g, d] = (pos[g, d] - xb[g, d]) * ihb
                 for j in range(ne):
                     b = bo + 2 * j + 1
                     e = e0 + j
+                    for d in range(3):
+                        alpha[eoff[k] + j, d] = step_scale * rhs[b, d]
                     rotate_directors(Q, e, step_scale, rhs[b, 0], rhs[b, 1], rhs[b, 2])
                     w0, w1, w2 = relative_rotation_vector(Qb, e, Q, e)
                     omega[e, 0] = w0 * ihb
@@ -949,6 +983,19 @@ def _as_left(n0, nn, e0, ne, pos, vel, Q, omega, xe, ve, Qe, we):
                 if Q[e, a, b] != Qe[e, a, b]:
                     return False
     return True
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def _predicted(n0, nn, e0, ne, pos, xn, Q, Qn, fixed, dx, phi) -> None:
+    """The predictor's displacement ``dx`` (m) and rotation vector ``phi`` from the step start,
+    zero for prescribed unknowns."""
+    for i in range(nn):
+        for d in range(3):
+            dx[i, d] = 0.0 if fixed[2 * i] else pos[n0 + i, d] - xn[n0 + i, d]
+    for j in range(ne):
+        w = relative_rotation_vector(Qn, e0 + j, Q, e0 + j)
+        for d in range(3):
+            phi[j, d] = 0.0 if fixed[2 * j + 1] else w[d]
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
