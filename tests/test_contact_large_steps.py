@@ -78,7 +78,11 @@ CASES = [pytest.param(kind, r, E, id=f"{kind}-r{r * 1e3:g}mm-E{E:.0e}", marks=(
                               "(halved) in 200; depth 17 % of the radius",
                        strict=True)] if (kind, r, E) == ("cylinder", 1e-3, 1e5) else []))
     for kind in ("plane", "sheet", "plate", "box", "cylinder")
-    for r in (1e-3, 5e-3) for E in (1e5, 2e11)]
+    for r in (1e-3, 5e-3) for E in (1e5, 2e11)] + [
+    pytest.param("box", 1e-3, 1e7, id="box-r1mm-E1e+07", marks=pytest.mark.xfail(
+        reason="the node at the box's edge carries the rope wrapping over it at impact: 25 % of "
+               "the radius deep (the penalty, chosen from the node's mass, is soft for a 1 mm "
+               "rope)", strict=True))]
 
 
 @pytest.mark.parametrize("kind, r, E", CASES)
