@@ -29,9 +29,9 @@ that pull then are released (and released ones pressed in since re-engaged) and 
 on (an active set, so that contacts at the edge of touching cannot switch at every iterate; see
 ``switch_active``).
 
-Per query slot (node ``i``, element ``N + e``) up to ``SP_K`` planes from different sources
-(planes of the world, then colliders): ``sp_i[q, k]`` = (source, anchored, sliding at the last
-step, active-set state), source
+Per query slot (node ``i``, element ``N + e``) up to ``SP_K`` planes, the nearest (of world
+planes and colliders; a collider may give two): ``sp_i[q, k]`` = (source, anchored, sliding at
+the last step, active-set state), source
 -1 for none, ``p`` for world plane ``p``, ``L + c`` for collider ``c``; ``sp_f[q, k]`` = point
 (3), normal (3) in the source's frame, segment parameter, d0, anchor point (3) in the source's
 frame, anchored segment parameter, current penetration and normal force (scratch).
@@ -143,7 +143,7 @@ def _surface_velocity(src, n_planes, pose, twist, q):
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, src, gap, q, n, s, pose, n_planes):
     """Offer a plane of ``src`` (gap in m, point q and normal n in the world) to ``slot``:
-    the ``SP_K`` nearest of different sources are kept (``keep_*`` holds the candidates)."""
+    the ``SP_K`` nearest are kept (``keep_*`` holds the candidates)."""
     k = -1
     for j in range(SP_K):
         if keep_src[j] < 0 or gap < keep_f[j]:
