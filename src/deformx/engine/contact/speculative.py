@@ -77,10 +77,21 @@ STICK_ZONE = 1e-6
 # A segment whose middle lies this many radii closer to a shape than its ends' mean gets a
 # plane at its middle (the surface curves under it).
 SAG = 0.1
+# The automatic penalty stops an impact at this speed (m/s) within this fraction of the radius.
+V_IMPACT, IMPACT_DEPTH = 5.0, 0.1
 MARGIN = 2.0  # the speculative margin is this many times the step's relative travel
 # The friction's coupling to the normal force enters the Newton matrix where it is at least
 # this fraction of mu times the normal stiffness (sliding, not sticking).
 MIN_COUPLING = 0.01
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def impact_frequency(h, radius):
+    """Contact frequency (rad/s) of a critically damped penalty that stops a point arriving at
+    ``V_IMPACT`` within ``IMPACT_DEPTH`` of its ``radius`` in one backward-Euler step ``h``:
+    ``w^2 h + 2 w = V_IMPACT / (IMPACT_DEPTH radius)``."""
+    x = h * V_IMPACT / (IMPACT_DEPTH * radius)
+    return x / (h * (math.sqrt(1.0 + x) + 1.0))  # (sqrt(1 + x) - 1) / h without cancellation
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -431,7 +442,8 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
             d0 = sp_f[slot, j, SP_D0]
             m = wa * mass[a] + wb * mass[b]
             kmin = wa * node_kmin[a] + wb * node_kmin[b]
-            kc, cc, mu_s, mu_k = _law(src, n_planes, planes, par, m, kmin, dt_ref)
+            kc, cc, mu_s, mu_k = _law(src, n_planes, planes, par, m, kmin,
+                                      min(dt_ref, 0.2 / impact_frequency(h, radius)))
             d_off = sp_f[slot, j, SP_OFF]
             fn = kc * (pen - d_off) + cc * (pen - max(d0, 0.0)) / h
             sp_f[slot, j, SP_FN] = fn
