@@ -64,9 +64,9 @@ from .verlet import OK, RUNAWAY_STRETCH, _check
 from .refcount import NO_REFCOUNT
 
 NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-steps
-# per rod: steps, Newton iterations, sub-steps at the iteration cap, last relative update,
-# step halvings (then the deepest start penetration, and BDF2 steps retried by backward Euler)
-N_STATS = 5
+# stats per rod (bundles' ``stats``): steps, Newton iterations, sub-steps at the iteration cap,
+# last relative update, step halvings, the deepest start penetration, BDF2 steps retried by
+# backward Euler.
 CHORD_RATE = 0.1  # reuse the factor while each update is below this fraction of the last
 EARLY_LIMIT = 10.0  # one-iteration steps only when the update is within this many tolerances
 MAX_SET_ROUNDS = 4  # contact releases per step before the set is frozen
