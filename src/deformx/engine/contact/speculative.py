@@ -77,6 +77,9 @@ STICK_ZONE = 1e-6
 # A segment whose middle lies this many radii closer to a shape than its ends' mean gets a
 # plane at its middle (the surface curves under it).
 SAG = 0.1
+# A segment found this many radii deep at a converged iterate, at a point between its ends that
+# its planes do not hold, gets a plane there and the step iterates on (``refind_segments``).
+REFIND_DEPTH = 0.1
 # The automatic penalty stops an impact at this speed (m/s) within this fraction of the radius.
 V_IMPACT, IMPACT_DEPTH = 5.0, 0.1
 MARGIN = 2.0  # the speculative margin is this many times the step's relative travel
@@ -347,6 +350,101 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
         if keep_src[0] >= 0:
             found += 1
     return found
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> int:
+    """At a converged iterate ``X`` (``Xs`` the step start): give each segment that now cuts
+    into a collider deeper than ``REFIND_DEPTH`` of its radius, at a point between its ends
+    that none of its planes holds, the tangent plane there; returns how many were added (the
+    caller then iterates on).
+
+    The planes found at the step start have fixed segment parameters: a segment that turns
+    round a mesh's edge within the step (level over the top face at the start, deepest at an
+    end, which its node carries) cuts the corner between its nodes' planes. A new plane acts
+    with no offset and as if the point had started the step outside (``d0`` <= 0: a plane
+    found at the end of the step may say nothing true of where the point was at its start)."""
+    if cols is None:
+        return 0
+    n_cols = cols.kind.shape[0]
+    if n_cols == 0:
+        return 0
+    node_radius = rd.n1[N_NODE_RADIUS]
+    n_planes = planes.shape[0]
+    n_nodes = X.shape[0]
+    pose = cols.pose[r]
+    added = 0
+    for k in range(nn, nn + ne):
+        node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
+        pa = (X[a, 0], X[a, 1], X[a, 2])
+        pb = (X[b, 0], X[b, 1], X[b, 2])
+        for c in range(n_cols):
+            if cols.allowed[r, c] == 0:
+                continue
+            reach = (1.0 - REFIND_DEPTH) * radius
+            if cols.kind[c] == MESH:
+                hit, s, sd, n, q = _mesh_closest(
+                    c, cols.rng[c, 4], pose, cols.par, cols.MV, cols.MF, cols.Blo, cols.Bhi,
+                    cols.Bleft, cols.Bright, cols.Bstart, cols.Bcount, cols.Border, cols.Fn,
+                    cols.En, cols.Vn, cols.Fg, cols.qc_meta, cols.qc_geo, cols.qc_tris,
+                    cols.qc_dist, cols.tr_stack[r], cols.tr_bound[r], slot, pa, pb, reach)
+            else:
+                hit, s, sd, n, q = _shape_closest(c, cols.kind[c], pose, cols.par, pa, pb, reach)
+            if not hit or s <= 0.0 or s >= 1.0:
+                continue
+            src = n_planes + c
+            pen = radius - sd
+            # A plane of this source that feels the segment about as deep at its own point
+            # holds it already (the point is as deep as that plane's force lets it be).
+            pick = -1
+            held = False
+            for j in range(SP_K):
+                if sp_i[slot, j, SP_SRC] < 0:
+                    if pick < 0:
+                        pick = j
+                    continue
+                if sp_i[slot, j, SP_SRC] == src:
+                    qj, nj = _plane_of(sp_f, slot, j, src, n_planes, pose)
+                    sj = sp_f[slot, j, SP_S]
+                    xj = ((1.0 - sj) * pa[0] + sj * pb[0], (1.0 - sj) * pa[1] + sj * pb[1],
+                          (1.0 - sj) * pa[2] + sj * pb[2])
+                    pj = radius - ((xj[0] - qj[0]) * nj[0] + (xj[1] - qj[1]) * nj[1]
+                                   + (xj[2] - qj[2]) * nj[2])
+                    if pj >= pen - REFIND_DEPTH * radius:
+                        held = True
+            if held:
+                continue
+            if pick < 0:  # full: replace the plane that pushes least
+                pick = 0
+                for j in range(1, SP_K):
+                    if (sp_i[slot, j, SP_SET] != ACTIVE) > (sp_i[slot, pick, SP_SET] != ACTIVE) or (
+                            (sp_i[slot, j, SP_SET] != ACTIVE) == (sp_i[slot, pick, SP_SET] != ACTIVE)
+                            and sp_f[slot, j, SP_FN] < sp_f[slot, pick, SP_FN]):
+                        pick = j
+            lq = _local_point(src, n_planes, pose, q[0], q[1], q[2])
+            ln = _local_vector(src, n_planes, pose, n[0], n[1], n[2])
+            xs = ((1.0 - s) * Xs[a, 0] + s * Xs[b, 0], (1.0 - s) * Xs[a, 1] + s * Xs[b, 1],
+                  (1.0 - s) * Xs[a, 2] + s * Xs[b, 2])
+            d0 = radius - ((xs[0] - q[0]) * n[0] + (xs[1] - q[1]) * n[1] + (xs[2] - q[2]) * n[2])
+            la = _local_point(src, n_planes, pose, xs[0], xs[1], xs[2])
+            sp_i[slot, pick, SP_SRC] = src
+            sp_i[slot, pick, SP_ANCHORED] = 0
+            sp_i[slot, pick, SP_SLIDING] = 0
+            sp_i[slot, pick, SP_SET] = INACTIVE
+            sp_i[slot, pick, SP_FLIPS] = 0
+            for d in range(3):
+                sp_f[slot, pick, SP_Q + d] = lq[d]
+                sp_f[slot, pick, SP_N + d] = ln[d]
+                sp_f[slot, pick, SP_A + d] = la[d]
+            sp_f[slot, pick, SP_S] = s
+            sp_f[slot, pick, SP_AS] = s
+            sp_f[slot, pick, SP_D0] = min(d0, 0.0)
+            sp_f[slot, pick, SP_OFF] = 0.0
+            sp_f[slot, pick, SP_FROZEN] = -1.0
+            sp_f[slot, pick, SP_PEN] = pen
+            sp_f[slot, pick, SP_FN] = 0.0
+            added += 1
+    return added
 
 
 @njit(cache=True, inline="always", error_model="numpy")

@@ -33,7 +33,8 @@ from numba import njit
 from ..contact.pairplanes import (PP_COLS, PS_COLS, commit_pairs, pair_plane, pair_plane_forces,
                                   release_pulling_pairs)
 from ..contact.speculative import (SP_K, freeze_friction_bounds, gather_planes, plane_forces,
-                                   project_predictor, release_pulling, start_penetrations)
+                                   project_predictor, refind_segments, release_pulling,
+                                   start_penetrations)
 from .banded import (BLOCK_BAND, LU_UPPER, add_lower, block_cholesky, block_lu, block_lu_solve,
                      block_solve, expand_upper, store_block)
 from .lowrank import lowrank_apply, lowrank_factor
@@ -71,6 +72,7 @@ CHORD_RATE = 0.1  # reuse the factor while each update is below this fraction of
 EARLY_LIMIT = 10.0  # one-iteration steps only when the update is within this many tolerances
 MAX_SET_ROUNDS = 4  # contact releases per step before the set is frozen
 MAX_PAIR_ROUNDS = 6  # and for rod-rod pairs (a pile lets go of more, one layer at a time)
+MAX_REFIND = 2  # rounds of planes added at converged iterates (refind_segments) per step
 ACCEPT = 1e-2  # an unconverged update above this fraction of an element length is rejected
 # An iterate that stretches an element past max_strain is taken back half its update, up to
 # this many times a step, before the step is halved.
@@ -582,7 +584,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                                      fixed[boff[k]:boff[k + 1]]) > 0:
                     calm[k] = 0.0
         t_new = t + hs
-        set_rounds = near_rounds = 0
+        set_rounds = near_rounds = refinds = 0
         frozen = False  # friction bounds fixed for the rest of the step
         # Iteration at which the contact set last changed. Rods in contact with each other get
         # a fresh budget after each release (a pile lets go one layer at a time); a rod alone
@@ -885,6 +887,21 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 if not done_iterating:
                     continue
                 converged = early or update <= tol
+                if converged and n_cols > 0 and refinds < MAX_REFIND:
+                    # Segments that cut into a collider between their planes get one there.
+                    added = 0
+                    for k in range(K):
+                        if near[k] != 0.0:
+                            n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+                            added += refind_segments(isl[k], n0, nn, e0, ne, pos, xn, planes,
+                                                     rd, cols, rd.sp_i, rd.sp_f)
+                    if added > 0:
+                        refinds += 1
+                        budget = it + max_iter
+                        round_start = it
+                        previous = 0.0
+                        last_update = math.inf
+                        continue
                 break
         if failed == OK and not converged and update > ACCEPT:
             failed = NOT_CONVERGED
