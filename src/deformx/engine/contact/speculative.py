@@ -47,8 +47,9 @@ from ..kernels.bundles import (
     N_CONTACT_FORCE, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS, R_COUPLED,
 )
 from .plane import PL_MUK, PL_MUS, V_OUT, plane_penalty
+from .primitives import tangent_bound
 from .segments import (
-    MESH, P_MUK, P_MUS, _add_reaction, _mesh_closest, _rotate, _shape_closest,
+    MESH, P_MUK, P_MUS, P_SHAPE, _add_reaction, _mesh_closest, _rotate, _shape_closest,
     _to_local, _to_world, collider_penalty,
 )
 from ..kernels.refcount import NO_REFCOUNT
@@ -80,6 +81,7 @@ SAG = 0.1
 # A segment found this many radii deep at a converged iterate, at a point between its ends that
 # its planes do not hold, gets a plane there and the step iterates on (``refind_segments``).
 REFIND_DEPTH = 0.1
+REFIND_MOVE = 0.03  # ... unless it moved less than this many radii along each axis in the step
 # The automatic penalty stops an impact at this speed (m/s) within this fraction of the radius.
 V_IMPACT, IMPACT_DEPTH = 5.0, 0.1
 MARGIN = 2.0  # the speculative margin is this many times the step's relative travel
@@ -372,14 +374,24 @@ def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> i
     node_radius = rd.n1[N_NODE_RADIUS]
     n_planes = planes.shape[0]
     n_nodes = X.shape[0]
-    pose = cols.pose[r]
+    pose, twist = cols.pose[r], cols.twist[r]
     added = 0
     for k in range(nn, nn + ne):
         node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
+        # A point's distance to a collider changes by at most what it moves (and, for a moving
+        # collider, what its surface moves): a segment that moved less than REFIND_MOVE of its
+        # radius in the step is about as deep as the last step's check left it (a rope at rest).
+        move = REFIND_MOVE * radius
+        still = (abs(X[a, 0] - Xs[a, 0]) < move and abs(X[a, 1] - Xs[a, 1]) < move
+                 and abs(X[a, 2] - Xs[a, 2]) < move and abs(X[b, 0] - Xs[b, 0]) < move
+                 and abs(X[b, 1] - Xs[b, 1]) < move and abs(X[b, 2] - Xs[b, 2]) < move)
         pa = (X[a, 0], X[a, 1], X[a, 2])
         pb = (X[b, 0], X[b, 1], X[b, 2])
         for c in range(n_cols):
             if cols.allowed[r, c] == 0:
+                continue
+            if still and (twist[c, 0] == 0.0 and twist[c, 1] == 0.0 and twist[c, 2] == 0.0
+                          and twist[c, 3] == 0.0 and twist[c, 4] == 0.0 and twist[c, 5] == 0.0):
                 continue
             reach = (1.0 - REFIND_DEPTH) * radius
             if cols.kind[c] == MESH:
@@ -389,6 +401,12 @@ def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> i
                     cols.En, cols.Vn, cols.Fg, cols.qc_meta, cols.qc_geo, cols.qc_tris,
                     cols.qc_dist, cols.tr_stack[r], cols.tr_bound[r], slot, pa, pb, reach)
             else:
+                la = _to_local(pose, c, pa[0], pa[1], pa[2])
+                lb = _to_local(pose, c, pb[0], pb[1], pb[2])
+                shape = (cols.par[c, P_SHAPE], cols.par[c, P_SHAPE + 1], cols.par[c, P_SHAPE + 2])
+                if tangent_bound(cols.kind[c], shape, la[0], la[1], la[2], lb[0], lb[1],
+                                 lb[2]) > reach:
+                    continue  # (a rope lying along a shape: no search)
                 hit, s, sd, n, q = _shape_closest(c, cols.kind[c], pose, cols.par, pa, pb, reach)
             if not hit or s <= 0.0 or s >= 1.0:
                 continue
