@@ -243,6 +243,19 @@ def _slot(k, n0, nn, e0, n_nodes, node_radius):
     return False, a, b, e0 + k - nn, n_nodes + e0 + k - nn, 0.5 * (node_radius[a] + node_radius[b])
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _closest(cols, r, c, pose, slot, pa, pb, reach):
+    """Deepest point of world segment pa-pb against collider ``c`` within ``reach`` (m), for
+    query ``slot`` of rod ``r``: see ``_mesh_closest`` and ``_shape_closest``."""
+    if cols.kind[c] == MESH:
+        return _mesh_closest(
+            c, cols.rng[c, 4], pose, cols.par, cols.MV, cols.MF, cols.Blo, cols.Bhi, cols.Bleft,
+            cols.Bright, cols.Bstart, cols.Bcount, cols.Border, cols.Fn, cols.En, cols.Vn,
+            cols.Fg, cols.qc_meta, cols.qc_geo, cols.qc_tris, cols.qc_dist, cols.tr_stack[r],
+            cols.tr_bound[r], slot, pa, pb, reach)
+    return _shape_closest(c, cols.kind[c], pose, cols.par, pa, pb, reach)
+
+
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, sp_f, keep_src,
                   keep_f, keep_n, x_start) -> int:
@@ -298,15 +311,7 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                       + math.sqrt(twist[c, 3] ** 2 + twist[c, 4] ** 2 + twist[c, 5] ** 2)
                       * math.sqrt(rx * rx + ry * ry + rz * rz))
                 reach = radius + MARGIN * (travel + vc * h) + 0.5 * radius
-                if cols.kind[c] == MESH:
-                    hit, s, sd, n, q = _mesh_closest(
-                        c, cols.rng[c, 4], pose, cols.par, cols.MV, cols.MF, cols.Blo, cols.Bhi,
-                        cols.Bleft, cols.Bright, cols.Bstart, cols.Bcount, cols.Border, cols.Fn,
-                        cols.En, cols.Vn, cols.Fg, cols.qc_meta, cols.qc_geo, cols.qc_tris,
-                        cols.qc_dist, cols.tr_stack[r], cols.tr_bound[r], slot, pa, pb, reach)
-                else:
-                    hit, s, sd, n, q = _shape_closest(c, cols.kind[c], pose, cols.par, pa, pb,
-                                                      reach)
+                hit, s, sd, n, q = _closest(cols, r, c, pose, slot, pa, pb, reach)
                 if not hit:
                     continue
                 if not node and cols.kind[c] != MESH and abs(s - 0.5) > 0.2:
@@ -394,20 +399,14 @@ def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> i
                           and twist[c, 3] == 0.0 and twist[c, 4] == 0.0 and twist[c, 5] == 0.0):
                 continue
             reach = (1.0 - REFIND_DEPTH) * radius
-            if cols.kind[c] == MESH:
-                hit, s, sd, n, q = _mesh_closest(
-                    c, cols.rng[c, 4], pose, cols.par, cols.MV, cols.MF, cols.Blo, cols.Bhi,
-                    cols.Bleft, cols.Bright, cols.Bstart, cols.Bcount, cols.Border, cols.Fn,
-                    cols.En, cols.Vn, cols.Fg, cols.qc_meta, cols.qc_geo, cols.qc_tris,
-                    cols.qc_dist, cols.tr_stack[r], cols.tr_bound[r], slot, pa, pb, reach)
-            else:
+            if cols.kind[c] != MESH:
                 la = _to_local(pose, c, pa[0], pa[1], pa[2])
                 lb = _to_local(pose, c, pb[0], pb[1], pb[2])
                 shape = (cols.par[c, P_SHAPE], cols.par[c, P_SHAPE + 1], cols.par[c, P_SHAPE + 2])
                 if tangent_bound(cols.kind[c], shape, la[0], la[1], la[2], lb[0], lb[1],
                                  lb[2]) > reach:
                     continue  # (a rope lying along a shape: no search)
-                hit, s, sd, n, q = _shape_closest(c, cols.kind[c], pose, cols.par, pa, pb, reach)
+            hit, s, sd, n, q = _closest(cols, r, c, pose, slot, pa, pb, reach)
             if not hit or s <= 0.0 or s >= 1.0:
                 continue
             src = n_planes + c
