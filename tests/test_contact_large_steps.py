@@ -328,3 +328,28 @@ def test_rope_sliding_off_a_box_edge_keeps_its_segments_out(collider, n_elements
     assert rope.positions[-1, 2] < -0.1  # the free half hangs down the side
     assert worst <= 0.2 * r, f"{worst * 1e3:.3f} mm deep ({worst / r:.0%} of the radius)"
     assert world.solver_stats()["halvings"] < 2
+
+
+@pytest.mark.parametrize("n_elements", [15, 30])
+def test_rope_over_a_moving_box_edge_keeps_its_segments_out(n_elements):
+    """The same rope over the box primitive's edge, the box then driven back and up under it at
+    (-0.5, 0, 0.3) m/s: the edge sweeps along the rope, whose segments turn round it within a
+    step (85 % and 23 % of the radius deep before segments were checked at the converged
+    iterate)."""
+    r = 0.001
+    world = dx.World(dt=DT, integrator="stable", rod_contact=False)
+    ext = np.array([0.3, 0.3, 0.1])
+    box = world.add_box(half_extents=ext / 2, pose=((0.0, 0.0, -0.05), np.eye(3)))
+    rope = world.add_rod(dx.Rod.straight(n_elements=n_elements, start=(0.0, 0.0, r + 0.002),
+                                         direction=(1, 0, 0), length=0.3, radius=r,
+                                         density=1000.0, youngs_modulus=1e5, damping=1.0))
+    worst = 0.0
+    for k in range(60):
+        if k == 20:
+            box.set_velocity((-0.5, 0.0, 0.3))
+        world.step()
+        Q = _segment_points(rope.positions, 9)
+        worst = max(worst, float((r - _box_sdf(Q, box.pose[:3, 3], ext / 2)).max()))
+    assert box.pose[0, 3] == pytest.approx(-0.2)  # it moved 0.2 m under the rope
+    assert worst <= 0.2 * r, f"{worst * 1e3:.3f} mm deep ({worst / r:.0%} of the radius)"
+    assert world.solver_stats()["halvings"] < 2
