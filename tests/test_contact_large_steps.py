@@ -81,15 +81,19 @@ CASES = [pytest.param(kind, r, E, id=f"{kind}-r{r * 1e3:g}mm-E{E:.0e}")
 
 
 @pytest.mark.parametrize("kind, r, E", CASES)
-def test_rope_dropped_at_large_steps_stays_outside(kind, r, E):
+def test_rope_dropped_at_large_steps_stays_outside(kind, r, E, caplog):
     world, rope, sdf = _scene(kind, r, E)
     worst = 0.0
-    for _ in range(200):  # impact at ~0.45 s, then 1.5 s to settle
-        world.step()
-        P = rope.positions
-        assert np.all(np.isfinite(P))
-        worst = max(worst, float((r - sdf(_segment_points(P))).max()))
-        assert P[:, 2].min() > -0.3, "passed through to the floor"
+    with caplog.at_level(logging.WARNING, logger="deformx"):
+        for _ in range(200):  # impact at ~0.45 s, then 1.5 s to settle
+            world.step()
+            P = rope.positions
+            assert np.all(np.isfinite(P))
+            worst = max(worst, float((r - sdf(_segment_points(P))).max()))
+            assert P[:, 2].min() > -0.3, "passed through to the floor"
+    # never inside by more than a step resolves, so no start-penetration warning (a node behind
+    # only the plane where it was headed, past a box edge, once gave a false one)
+    assert not [rec for rec in caplog.records if "inside a collider" in rec.message]
     stats = world.solver_stats()
     print(f"{kind} r={r} E={E:g}: depth {worst * 1e3:.3f} mm, {stats}")
     assert worst <= 0.2 * r, f"{worst * 1e3:.3f} mm deep ({worst / r:.0%} of the radius)"

@@ -569,7 +569,14 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
             if commit and fn <= 0.0:
                 continue
             if commit and d_off > 0.0 and d0 > 0.2 * radius and d0 > stats[5]:
-                stats[5] = d0
+                # A point inside a convex body lies behind all its tangent planes, no deeper
+                # than behind the shallowest: a node behind only the plane where it is headed
+                # (past the edge of a box's face) is not inside.
+                for jj in range(SP_K):
+                    if sp_i[slot, jj, SP_SRC] == src:
+                        d0 = min(d0, sp_f[slot, jj, SP_D0])
+                if d0 > 0.2 * radius:
+                    stats[5] = max(stats[5], d0)
             f = (fn * n[0], fn * n[1], fn * n[2])
             ka = 0.0  # tangential stiffness along the friction force, and across it (N/m)
             kb = 0.0
