@@ -303,32 +303,46 @@ def test_thin_rope_at_small_steps_stays_as_far_out_as_at_large_ones(kind):
     assert world.solver_stats()["halvings"] == 0
 
 
+EDGE_BOX = np.array([0.3, 0.3, 0.1])  # extents (m) of the box whose edge the rope lies over
+
+
+def _rope_over_box_edge(collider: str, n_elements: int):
+    """Half of a 0.3 m, 1 mm rope (E = 1e5) laid over the edge of a box (top at z = 0) as a mesh
+    or a primitive, at dt = 1e-2 s; returns the world, the box (primitive, else None), the rope
+    and its depth (m) into a box centred at c: nine points per segment."""
+    r = 0.001
+    world = dx.World(dt=DT, integrator="stable", rod_contact=False)
+    c = np.array([0.0, 0.0, -0.05])
+    box = None
+    if collider == "mesh":
+        mesh = trimesh.creation.box(extents=EDGE_BOX)
+        mesh.apply_translation(c)
+        world.add_mesh(mesh)
+    else:
+        box = world.add_box(half_extents=EDGE_BOX / 2, pose=(c, np.eye(3)))
+    rope = world.add_rod(dx.Rod.straight(n_elements=n_elements, start=(0.0, 0.0, r + 0.002),
+                                         direction=(1, 0, 0), length=0.3, radius=r,
+                                         density=1000.0, youngs_modulus=1e5, damping=1.0))
+
+    def depth(c=c):
+        return float((r - _box_sdf(_segment_points(rope.positions, 9), c, EDGE_BOX / 2)).max())
+    return world, box, rope, depth
+
+
 @pytest.mark.parametrize("n_elements", [15, 30])
 @pytest.mark.parametrize("collider", ["mesh", "primitive"])
 def test_rope_sliding_off_a_box_edge_keeps_its_segments_out(collider, n_elements):
-    """Half of a 1 mm rope (E = 1e5) laid over the edge of a box mesh swings down round it at
-    dt = 1e-2 s; exact depths at nine points per segment, every step. With 2 cm elements the
+    """The rope swings down round the edge; exact depths every step. With 2 cm elements the
     segment on the edge is level over the top face at a step's start (deepest at an end, which
     its node carries) and its other node out of reach; in the step it turns round the edge and
     cut the corner 145 % of the radius deep (140 % off the box primitive) before segments were
     checked at the converged iterate."""
-    r = 0.001
-    world = dx.World(dt=DT, integrator="stable", rod_contact=False)
-    ext, c = np.array([0.3, 0.3, 0.1]), np.array([0.0, 0.0, -0.05])
-    if collider == "mesh":
-        mesh = trimesh.creation.box(extents=ext)
-        mesh.apply_translation(c)
-        world.add_mesh(mesh)
-    else:
-        world.add_box(half_extents=ext / 2, pose=(c, np.eye(3)))
-    rope = world.add_rod(dx.Rod.straight(n_elements=n_elements, start=(0.0, 0.0, r + 0.002),
-                                         direction=(1, 0, 0), length=0.3, radius=r,
-                                         density=1000.0, youngs_modulus=1e5, damping=1.0))
+    world, _, rope, depth = _rope_over_box_edge(collider, n_elements)
     worst = 0.0
     for _ in range(60):
         world.step()
-        Q = _segment_points(rope.positions, 9)
-        worst = max(worst, float((r - _box_sdf(Q, c, ext / 2)).max()))
+        worst = max(worst, depth())
+    r = rope.radius
     assert rope.positions[-1, 2] < -0.1  # the free half hangs down the side
     assert worst <= 0.2 * r, f"{worst * 1e3:.3f} mm deep ({worst / r:.0%} of the radius)"
     assert world.solver_stats()["halvings"] < 2
@@ -340,20 +354,14 @@ def test_rope_over_a_moving_box_edge_keeps_its_segments_out(n_elements):
     (-0.5, 0, 0.3) m/s: the edge sweeps along the rope, whose segments turn round it within a
     step (85 % and 23 % of the radius deep before segments were checked at the converged
     iterate)."""
-    r = 0.001
-    world = dx.World(dt=DT, integrator="stable", rod_contact=False)
-    ext = np.array([0.3, 0.3, 0.1])
-    box = world.add_box(half_extents=ext / 2, pose=((0.0, 0.0, -0.05), np.eye(3)))
-    rope = world.add_rod(dx.Rod.straight(n_elements=n_elements, start=(0.0, 0.0, r + 0.002),
-                                         direction=(1, 0, 0), length=0.3, radius=r,
-                                         density=1000.0, youngs_modulus=1e5, damping=1.0))
+    world, box, rope, depth = _rope_over_box_edge("primitive", n_elements)
     worst = 0.0
     for k in range(60):
         if k == 20:
             box.set_velocity((-0.5, 0.0, 0.3))
         world.step()
-        Q = _segment_points(rope.positions, 9)
-        worst = max(worst, float((r - _box_sdf(Q, box.pose[:3, 3], ext / 2)).max()))
+        worst = max(worst, depth(box.pose[:3, 3]))
+    r = rope.radius
     assert box.pose[0, 3] == pytest.approx(-0.2)  # it moved 0.2 m under the rope
     assert worst <= 0.2 * r, f"{worst * 1e3:.3f} mm deep ({worst / r:.0%} of the radius)"
     assert world.solver_stats()["halvings"] < 2

@@ -371,11 +371,9 @@ def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> i
     end, which its node carries) cuts the corner between its nodes' planes. A new plane acts
     with no offset and as if the point had started the step outside (``d0`` <= 0: a plane
     found at the end of the step may say nothing true of where the point was at its start)."""
-    if cols is None:
+    if cols is None:  # (pruned at compile time; the caller checks there are colliders)
         return 0
     n_cols = cols.kind.shape[0]
-    if n_cols == 0:
-        return 0
     node_radius = rd.n1[N_NODE_RADIUS]
     n_planes = planes.shape[0]
     n_nodes = X.shape[0]
@@ -431,12 +429,13 @@ def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> i
                         held = True
             if held:
                 continue
-            if pick < 0:  # full: replace the plane that pushes least
+            if pick < 0:  # full: replace an inactive plane, else the one that pushes least
                 pick = 0
                 for j in range(1, SP_K):
-                    if (sp_i[slot, j, SP_SET] != ACTIVE) > (sp_i[slot, pick, SP_SET] != ACTIVE) or (
-                            (sp_i[slot, j, SP_SET] != ACTIVE) == (sp_i[slot, pick, SP_SET] != ACTIVE)
-                            and sp_f[slot, j, SP_FN] < sp_f[slot, pick, SP_FN]):
+                    on_j = sp_i[slot, j, SP_SET] == ACTIVE
+                    on_pick = sp_i[slot, pick, SP_SET] == ACTIVE
+                    if (on_pick and not on_j) or (
+                            on_j == on_pick and sp_f[slot, j, SP_FN] < sp_f[slot, pick, SP_FN]):
                         pick = j
             lq = _local_point(src, n_planes, pose, q[0], q[1], q[2])
             ln = _local_vector(src, n_planes, pose, n[0], n[1], n[2])
