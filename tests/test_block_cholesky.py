@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from deformx.engine.kernels.banded import (LU_UPPER, block_cholesky, block_lu, block_lu_solve,
-                                            block_solve, expand_upper)
+                                            block_solve, block_solve_columns, expand_upper)
 
 
 def _random_spd_block_band(nb: int, seed: int):
@@ -36,6 +36,22 @@ def test_block_cholesky_solves_like_dense():
     block_solve(band, 41, x)
     assert np.allclose(x.ravel(), np.linalg.solve(A, b.ravel()), rtol=1e-12, atol=1e-14)
 
+
+
+def test_block_solve_columns_solves_sparse_right_hand_sides_like_dense():
+    nb, first = 41, 17
+    A, band = _random_spd_block_band(nb, seed=5)
+    assert block_cholesky(band, nb) == 0
+    rng = np.random.default_rng(6)
+    for ncol in (1, 2, 3):
+        b = np.zeros((3, nb, 3))
+        b[:, first:first + 3] = rng.normal(size=(3, 3, 3))  # zero before block `first`
+        x = b.copy()
+        block_solve_columns(band, nb, x[0], x[min(1, ncol - 1)], x[ncol - 1], ncol, first)
+        for j in range(ncol):
+            assert np.allclose(x[j].ravel(), np.linalg.solve(A, b[j].ravel()), rtol=1e-12,
+                               atol=1e-14)
+        assert np.array_equal(x[ncol:], b[ncol:])  # the columns past ncol are left alone
 
 def test_block_cholesky_reports_an_indefinite_pivot():
     A, band = _random_spd_block_band(10, seed=3)

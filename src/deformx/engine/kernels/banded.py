@@ -211,6 +211,61 @@ def block_solve(A, nb, x) -> None:
         n1 = r
 
 
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _forward_row(A, I, x, p2, p1, di):
+    """One forward row of :func:`block_solve` for one right-hand side: returns y_I."""
+    y = (x[I, 0], x[I, 1], x[I, 2])
+    if I >= 2:
+        y = _sub_ax(y, _load(A, I, 2), p2)
+    if I >= 1:
+        y = _sub_ax(y, _load(A, I, 1), p1)
+    x[I, 0] = di[0] * y[0] + di[1] * y[1] + di[3] * y[2]
+    x[I, 1] = di[1] * y[0] + di[2] * y[1] + di[4] * y[2]
+    x[I, 2] = di[3] * y[0] + di[4] * y[1] + di[5] * y[2]
+    return y
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _backward_row(A, I, nb, x, n1, n2):
+    """One backward row of :func:`block_solve`: returns x_I."""
+    r = (x[I, 0], x[I, 1], x[I, 2])
+    if I + 1 < nb:
+        r = _sub_atx(r, _load(A, I + 1, 1), n1)
+    if I + 2 < nb:
+        r = _sub_atx(r, _load(A, I + 2, 2), n2)
+    x[I, 0], x[I, 1], x[I, 2] = r
+    return r
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def block_solve_columns(A, nb, x0, x1, x2, ncol, first) -> None:
+    """:func:`block_solve` for ``ncol`` (1-3) right-hand sides at once, each zero before block
+    ``first``. The rows' recurrences are latency bound: three interleaved chains cost little
+    more than one, and the forward pass starts where the right-hand sides do."""
+    z = (0.0, 0.0, 0.0)
+    a2 = a1 = b2 = b1 = c2 = c1 = z
+    for I in range(first, nb):
+        di = _load_lower(A, I)
+        ya = _forward_row(A, I, x0, a2, a1, di)
+        a2, a1 = a1, ya
+        if ncol > 1:
+            yb = _forward_row(A, I, x1, b2, b1, di)
+            b2, b1 = b1, yb
+        if ncol > 2:
+            yc = _forward_row(A, I, x2, c2, c1, di)
+            c2, c1 = c1, yc
+    a2 = a1 = b2 = b1 = c2 = c1 = z
+    for I in range(nb - 1, -1, -1):
+        ra = _backward_row(A, I, nb, x0, a1, a2)
+        a2, a1 = a1, ra
+        if ncol > 1:
+            rb = _backward_row(A, I, nb, x1, b1, b2)
+            b2, b1 = b1, rb
+        if ncol > 2:
+            rc = _backward_row(A, I, nb, x2, c1, c2)
+            c2, c1 = c1, rc
+
 # ---------------------------------------------------------------- nonsymmetric band (block LU)
 # A Newton matrix made nonsymmetric by friction (the friction bound mu N follows the normal
 # force, a coupling the symmetric matrix leaves out) is held as the lower blocks above plus the

@@ -9,7 +9,8 @@ friction, along two tangents (its stiffness along and across the slip). By the W
     (D + G K G^T)^-1 b = y - Z (K^-1 + G^T Z)^-1 G^T y,    y = D^-1 b,   Z = D^-1 G,
 
 the coupled system costs one banded solve per column and rod it touches (``Z``, kept while
-the factors are reused) and a dense solve of the columns' matrix: exact, so two rods in
+the factors are reused; a pair's up to three columns share one pass, which starts at the
+pair's first node) and a dense solve of the columns' matrix: exact, so two rods in
 contact agree on where the other one ends the step however stiff the contact is.
 """
 
@@ -20,7 +21,7 @@ import math
 from numba import njit
 
 from ..contact.pairplanes import PP_KA, PP_KB, PP_KN, PP_N, PP_S, PP_SH, PP_T
-from .banded import block_solve
+from .banded import block_solve_columns
 from .bundles import E_SEG_A, E_SEG_B
 from .refcount import NO_REFCOUNT
 
@@ -70,27 +71,40 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
                 cdir[nc, 0], cdir[nc, 1], cdir[nc, 2] = dirn
                 ck[nc] = k
                 nc += 1
-    for c in range(nc):
+    c = 0
+    while c < nc:  # a pair's columns (consecutive) share their nodes: solved together
         p = act[c]
+        g = 1
+        while g < 3 and c + g < nc and act[c + g] == p:
+            g += 1
         nodes, w = _corners(p, pairs, seg_a, seg_b, pp)
         ka = node_rod[nodes[0]]
         kb = node_rod[nodes[2]]
-        csup[c, 0] = ka
-        csup[c, 1] = kb
+        for j in range(c, c + g):
+            csup[j, 0] = ka
+            csup[j, 1] = kb
+            for kr in (ka, kb):
+                for b in range(boff[kr], boff[kr + 1]):
+                    Z[j, b, 0] = 0.0
+                    Z[j, b, 1] = 0.0
+                    Z[j, b, 2] = 0.0
+            for k in range(4):
+                blk = node_block[nodes[k]]
+                if not fixed[blk]:
+                    for d in range(3):
+                        Z[j, blk, d] += w[k] * cdir[j, d]
         for kr in (ka, kb):
-            for b in range(boff[kr], boff[kr + 1]):
-                Z[c, b, 0] = 0.0
-                Z[c, b, 1] = 0.0
-                Z[c, b, 2] = 0.0
-        for k in range(4):
-            blk = node_block[nodes[k]]
-            if not fixed[blk]:
-                for d in range(3):
-                    Z[c, blk, d] += w[k] * cdir[c, d]
-        block_solve(A[boff[ka]:boff[ka + 1]], boff[ka + 1] - boff[ka], Z[c, boff[ka]:boff[ka + 1]])
-        if kb != ka:
-            block_solve(A[boff[kb]:boff[kb + 1]], boff[kb + 1] - boff[kb],
-                        Z[c, boff[kb]:boff[kb + 1]])
+            bo, nb = boff[kr], boff[kr + 1] - boff[kr]
+            first = nb
+            for k in range(4):
+                if node_rod[nodes[k]] == kr:
+                    first = min(first, node_block[nodes[k]] - bo)
+            block_solve_columns(A[bo:bo + nb], nb, Z[c, bo:bo + nb],
+                                Z[c + min(1, g - 1), bo:bo + nb], Z[c + g - 1, bo:bo + nb], g,
+                                first)
+            if kb == ka:
+                break
+        c += g
     for c in range(nc):  # S = K^-1 + G^T Z (lower triangle), then its Cholesky factor
         nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
         for e in range(c + 1):
