@@ -176,45 +176,9 @@ def _sub_atx(r, m, x):
             r[2] - (m[2] * x[0] + m[5] * x[1] + m[8] * x[2]))
 
 
-@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def block_solve(A, nb, x) -> None:
-    """Solve ``L D L^T x = b`` in place (``x`` holds b, shape (nb, 3)) with the block factor.
-
-    The last two solution blocks are carried along in locals rather than re-read from ``x``.
-    """
-    # Forward: y_I = b_I - L[I, I-2] y_{I-2} - L[I, I-1] y_{I-1}; x_I <- D_I^-1 y_I.
-    p2 = (0.0, 0.0, 0.0)  # y_{I-2}
-    p1 = (0.0, 0.0, 0.0)  # y_{I-1}
-    for I in range(nb):
-        y = (x[I, 0], x[I, 1], x[I, 2])
-        if I >= 2:
-            y = _sub_ax(y, _load(A, I, 2), p2)
-        if I >= 1:
-            y = _sub_ax(y, _load(A, I, 1), p1)
-        di = _load_lower(A, I)
-        x[I, 0] = di[0] * y[0] + di[1] * y[1] + di[3] * y[2]
-        x[I, 1] = di[1] * y[0] + di[2] * y[1] + di[4] * y[2]
-        x[I, 2] = di[3] * y[0] + di[4] * y[1] + di[5] * y[2]
-        p2 = p1
-        p1 = y
-    # Backward: x_I = D_I^-1 y_I - L[I+1, I]^T x_{I+1} - L[I+2, I]^T x_{I+2}.
-    n1 = (0.0, 0.0, 0.0)  # x_{I+1}
-    n2 = (0.0, 0.0, 0.0)  # x_{I+2}
-    for I in range(nb - 1, -1, -1):
-        r = (x[I, 0], x[I, 1], x[I, 2])
-        if I + 1 < nb:
-            r = _sub_atx(r, _load(A, I + 1, 1), n1)
-        if I + 2 < nb:
-            r = _sub_atx(r, _load(A, I + 2, 2), n2)
-        x[I, 0], x[I, 1], x[I, 2] = r
-        n2 = n1
-        n1 = r
-
-
-
 @njit(cache=True, inline="always", error_model="numpy")
 def _forward_row(A, I, x, p2, p1, di):
-    """One forward row of :func:`block_solve` for one right-hand side: returns y_I."""
+    """One forward row of the block solve for one right-hand side: returns y_I."""
     y = (x[I, 0], x[I, 1], x[I, 2])
     if I >= 2:
         y = _sub_ax(y, _load(A, I, 2), p2)
@@ -228,7 +192,7 @@ def _forward_row(A, I, x, p2, p1, di):
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _backward_row(A, I, nb, x, n1, n2):
-    """One backward row of :func:`block_solve`: returns x_I."""
+    """One backward row of the block solve: returns x_I."""
     r = (x[I, 0], x[I, 1], x[I, 2])
     if I + 1 < nb:
         r = _sub_atx(r, _load(A, I + 1, 1), n1)
@@ -236,6 +200,28 @@ def _backward_row(A, I, nb, x, n1, n2):
         r = _sub_atx(r, _load(A, I + 2, 2), n2)
     x[I, 0], x[I, 1], x[I, 2] = r
     return r
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def block_solve(A, nb, x) -> None:
+    """Solve ``L D L^T x = b`` in place (``x`` holds b, shape (nb, 3)) with the block factor.
+
+    The last two solution blocks are carried along in locals rather than re-read from ``x``.
+    """
+    # Forward: y_I = b_I - L[I, I-2] y_{I-2} - L[I, I-1] y_{I-1}; x_I <- D_I^-1 y_I.
+    p2 = (0.0, 0.0, 0.0)  # y_{I-2}
+    p1 = (0.0, 0.0, 0.0)  # y_{I-1}
+    for I in range(nb):
+        y = _forward_row(A, I, x, p2, p1, _load_lower(A, I))
+        p2 = p1
+        p1 = y
+    # Backward: x_I = D_I^-1 y_I - L[I+1, I]^T x_{I+1} - L[I+2, I]^T x_{I+2}.
+    n1 = (0.0, 0.0, 0.0)  # x_{I+1}
+    n2 = (0.0, 0.0, 0.0)  # x_{I+2}
+    for I in range(nb - 1, -1, -1):
+        r = _backward_row(A, I, nb, x, n1, n2)
+        n2 = n1
+        n1 = r
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
@@ -265,6 +251,7 @@ def block_solve_columns(A, nb, x0, x1, x2, ncol, first) -> None:
         if ncol > 2:
             rc = _backward_row(A, I, nb, x2, c1, c2)
             c2, c1 = c1, rc
+
 
 # ---------------------------------------------------------------- nonsymmetric band (block LU)
 # A Newton matrix made nonsymmetric by friction (the friction bound mu N follows the normal
