@@ -37,7 +37,6 @@ def test_block_cholesky_solves_like_dense():
     assert np.allclose(x.ravel(), np.linalg.solve(A, b.ravel()), rtol=1e-12, atol=1e-14)
 
 
-
 def test_block_solve_columns_solves_sparse_right_hand_sides_like_dense():
     nb, first = 41, 17
     A, band = _random_spd_block_band(nb, seed=5)
@@ -52,6 +51,7 @@ def test_block_solve_columns_solves_sparse_right_hand_sides_like_dense():
             assert np.allclose(x[j].ravel(), np.linalg.solve(A, b[j].ravel()), rtol=1e-12,
                                atol=1e-14)
         assert np.array_equal(x[ncol:], b[ncol:])  # the columns past ncol are left alone
+
 
 def test_block_cholesky_reports_an_indefinite_pivot():
     A, band = _random_spd_block_band(10, seed=3)

@@ -25,6 +25,9 @@ from deformx.engine.contact.primitives import (
 )
 
 SETUPS = {"verlet": 2e-5, "stable": 1e-3}
+# A shape of each kind (its parameters, m) for the query-function checks below.
+SHAPES = [(SPHERE, (0.05, 0, 0)), (BOX, (0.2, 0.1, 0.05)), (CAPSULE, (0.05, 0.2, 0)),
+          (CYLINDER, (0.05, 0.2, 0))]
 R = 0.002
 G = 9.81
 ROT_X = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])  # local z -> world y
@@ -82,8 +85,12 @@ def test_rope_rests_on_primitive(kind, integrator):
         assert rod.positions[0, 2] < 0.03 and rod.positions[-1, 2] < 0.03
 
 
-@pytest.mark.parametrize("kind,params", [(SPHERE, (0.05, 0, 0)), (BOX, (0.2, 0.1, 0.05)),
-                                          (CAPSULE, (0.05, 0.2, 0)), (CYLINDER, (0.05, 0.2, 0))])
+def _sdf_along(kind, par, a, b, t) -> np.ndarray:
+    """The shape's signed distance (m) at the points a + t (b - a) of a segment."""
+    return np.array([shape_sdf(kind, par, *(a + ti * (b - a)))[0] for ti in t])
+
+
+@pytest.mark.parametrize("kind,params", SHAPES)
 def test_segment_deepest_point_matches_dense_sampling(kind, params):
     rng = np.random.default_rng(kind)
     par = np.array(params, dtype=float)
@@ -93,7 +100,7 @@ def test_segment_deepest_point_matches_dense_sampling(kind, params):
         b = a + rng.normal(scale=0.2, size=3)
         s = segment_deepest(kind, par, *a, *b)
         f = shape_sdf(kind, par, *(a + s * (b - a)))[0]
-        fine = np.array([shape_sdf(kind, par, *(a + ti * (b - a)))[0] for ti in t])
+        fine = _sdf_along(kind, par, a, b, t)
         assert f <= fine.min() + 1e-9, (kind, a, b, s)
         assert segment_deepest(kind, par, *a, *a) == 0.0  # a node's query: a point
     # Normals are unit and point along the distance gradient.
@@ -107,8 +114,7 @@ def test_segment_deepest_point_matches_dense_sampling(kind, params):
         assert (d2 - d) / h == pytest.approx(1.0, abs=1e-3)
 
 
-@pytest.mark.parametrize("kind,params", [(SPHERE, (0.05, 0, 0)), (BOX, (0.2, 0.1, 0.05)),
-                                          (CAPSULE, (0.05, 0.2, 0)), (CYLINDER, (0.05, 0.2, 0))])
+@pytest.mark.parametrize("kind,params", SHAPES)
 def test_bounding_gap_never_exceeds_the_segments_least_signed_distance(kind, params):
     """The early-out of shape contact (a segment farther from the shape's bounding ball than
     the contact reach is skipped) must never skip a segment that comes within reach."""
@@ -120,7 +126,7 @@ def test_bounding_gap_never_exceeds_the_segments_least_signed_distance(kind, par
         a = rng.uniform(-0.6, 0.6, 3)
         b = a + rng.normal(scale=0.2, size=3)
         bound = bounding_gap(kind, par, *a, *b)
-        least = min(shape_sdf(kind, par, *(a + ti * (b - a)))[0] for ti in t)
+        least = _sdf_along(kind, par, a, b, t).min()
         assert bound <= least + 1e-12, (kind, a, b)
         gaps.append(least - bound)
     if kind == SPHERE:  # the ball is the sphere: exact up to the sampling
@@ -128,8 +134,7 @@ def test_bounding_gap_never_exceeds_the_segments_least_signed_distance(kind, par
     assert np.median(gaps) < 0.25  # a bound, but not a vacuous one
 
 
-@pytest.mark.parametrize("kind,params", [(SPHERE, (0.05, 0, 0)), (BOX, (0.2, 0.1, 0.05)),
-                                          (CAPSULE, (0.05, 0.2, 0)), (CYLINDER, (0.05, 0.2, 0))])
+@pytest.mark.parametrize("kind,params", SHAPES)
 def test_tangent_bound_never_exceeds_the_segments_least_signed_distance(kind, params):
     """The end-of-step check of segments skips those whose tangent bound (the shape's signed
     distance is convex) lies beyond the depth it looks for: it must be a true lower bound, and
@@ -141,7 +146,7 @@ def test_tangent_bound_never_exceeds_the_segments_least_signed_distance(kind, pa
         a = rng.uniform(-0.3, 0.3, 3)
         b = a + rng.normal(scale=0.05, size=3)
         bound = tangent_bound(kind, par, *a, *b)
-        f = np.array([shape_sdf(kind, par, *(a + ti * (b - a)))[0] for ti in t])
+        f = _sdf_along(kind, par, a, b, t)
         assert bound <= f.min() + 1e-12, (kind, a, b)
         if f.argmin() in (0, t.size - 1) and f.min() > 0.0:
             assert bound == pytest.approx(f.min(), abs=1e-12)

@@ -88,6 +88,8 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
                     Z[j, b, 0] = 0.0
                     Z[j, b, 1] = 0.0
                     Z[j, b, 2] = 0.0
+                if kb == ka:  # a self-contact: one rod
+                    break
             for k in range(4):
                 blk = node_block[nodes[k]]
                 if not fixed[blk]:
