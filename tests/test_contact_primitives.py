@@ -90,14 +90,20 @@ def _sdf_along(kind, par, a, b, t) -> np.ndarray:
     return np.array([shape_sdf(kind, par, *(a + ti * (b - a)))[0] for ti in t])
 
 
+def _random_segments(rng: np.random.Generator, n: int, spread: float, length: float):
+    """n segments (a, b) drawn from ``rng``: a uniform in a cube of half-side ``spread`` (m),
+    b - a normal with scale ``length`` (m)."""
+    for _ in range(n):
+        a = rng.uniform(-spread, spread, 3)
+        yield a, a + rng.normal(scale=length, size=3)
+
+
 @pytest.mark.parametrize("kind,params", SHAPES)
 def test_segment_deepest_point_matches_dense_sampling(kind, params):
     rng = np.random.default_rng(kind)
     par = np.array(params, dtype=float)
     t = np.linspace(0, 1, 1001)
-    for _ in range(60):
-        a = rng.uniform(-0.3, 0.3, 3)
-        b = a + rng.normal(scale=0.2, size=3)
+    for a, b in _random_segments(rng, 60, 0.3, 0.2):
         s = segment_deepest(kind, par, *a, *b)
         f = shape_sdf(kind, par, *(a + s * (b - a)))[0]
         fine = _sdf_along(kind, par, a, b, t)
@@ -118,13 +124,10 @@ def test_segment_deepest_point_matches_dense_sampling(kind, params):
 def test_bounding_gap_never_exceeds_the_segments_least_signed_distance(kind, params):
     """The early-out of shape contact (a segment farther from the shape's bounding ball than
     the contact reach is skipped) must never skip a segment that comes within reach."""
-    rng = np.random.default_rng(10 + kind)
     par = np.array(params, dtype=float)
     t = np.linspace(0, 1, 1001)
     gaps = []
-    for _ in range(200):
-        a = rng.uniform(-0.6, 0.6, 3)
-        b = a + rng.normal(scale=0.2, size=3)
+    for a, b in _random_segments(np.random.default_rng(10 + kind), 200, 0.6, 0.2):
         bound = bounding_gap(kind, par, *a, *b)
         least = _sdf_along(kind, par, a, b, t).min()
         assert bound <= least + 1e-12, (kind, a, b)
@@ -139,12 +142,9 @@ def test_tangent_bound_never_exceeds_the_segments_least_signed_distance(kind, pa
     """The end-of-step check of segments skips those whose tangent bound (the shape's signed
     distance is convex) lies beyond the depth it looks for: it must be a true lower bound, and
     exact for a segment whose deepest point is an end."""
-    rng = np.random.default_rng(20 + kind)
     par = np.array(params, dtype=float)
     t = np.linspace(0, 1, 1001)
-    for _ in range(200):
-        a = rng.uniform(-0.3, 0.3, 3)
-        b = a + rng.normal(scale=0.05, size=3)
+    for a, b in _random_segments(np.random.default_rng(20 + kind), 200, 0.3, 0.05):
         bound = tangent_bound(kind, par, *a, *b)
         f = _sdf_along(kind, par, a, b, t)
         assert bound <= f.min() + 1e-12, (kind, a, b)
