@@ -21,7 +21,9 @@
     python benchmarks/hit_target_results.py --steps 20000 --targets high --ropes cosserat
     python benchmarks/hit_target_results.py --normalize --seeds 2 --select robust --out runs
     python benchmarks/hit_target_results.py --normalize --seeds 2 --select robust --ref-check \
-        --ropes cosserat --out runs    # + the reference's own step convergence
+        --ropes cosserat --out runs    # + the reference's own step and element convergence
+    python benchmarks/hit_target_results.py --normalize --seeds 4 --ropes cosserat --ref-check \
+        --train-elements 40 --train-dt 1e-4 --train-order 1 --out runs   # a finer training rope
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ import numpy as np
 TARGETS = {"high": (0.0, 2.0, 2.3), "mid": (0.0, 2.0, 1.5), "low": (0.0, 1.7, 0.5)}
 PAPER = {"high": (4.2, 4.9), "mid": (1.4, 4.4), "low": (3.3, 4.3)}  # cm: Cosserat, capsule
 REF_CHECK_DTS = (1e-4, 5e-5, 2.5e-5)  # s: the reference rope's step check (--ref-check)
+REF_CHECK_ELEMENTS = (150, 200)  # and its element check, at 2.5e-5 s
 
 
 def main() -> None:
@@ -67,7 +70,15 @@ def main() -> None:
     parser.add_argument("--ref-check", action="store_true",
                         help="also replay each trajectory once on the reference rope with its "
                              "nominal parameters at backward-Euler steps of 1e-4, 5e-5 and "
-                             "2.5e-5 s (how well the reference itself is converged)")
+                             "2.5e-5 s, and with 150 and 200 elements at 2.5e-5 s (how well "
+                             "the reference itself is converged)")
+    parser.add_argument("--train-elements", type=int, default=None,
+                        help="elements of the Cosserat training rope (default: the task's 20)")
+    parser.add_argument("--train-dt", type=float, default=None,
+                        help="step (s) of the Cosserat training rope (default: the task's 2 ms)")
+    parser.add_argument("--train-order", type=int, default=None, choices=[1, 2],
+                        help="stable integrator order of the Cosserat training rope (default: "
+                             "the task's BDF2)")
     args = parser.parse_args()
     from deformx.engine.rod import explicit_time_step
     from deformx.learn.task import HitTargetConfig
@@ -78,9 +89,17 @@ def main() -> None:
     for name in args.targets:
         for rope in args.ropes:
             task = dict(target=TARGETS[name], rope=rope)
+            tag = ""
+            if rope == "cosserat":  # the training rope's own numbers, where not the task's
+                for key, arg, short in (("n_elements", args.train_elements, "e"),
+                                        ("rope_dt", args.train_dt, "dt"),
+                                        ("order", args.train_order, "o")):
+                    if arg is not None:
+                        task[key] = arg
+                        tag += f"_{short}{arg:g}"
             runs = []
             for seed in range(args.seeds):  # resumable: a finished run only re-evaluates
-                out = args.out / (f"{name}_{rope}" + (f"_s{seed}" if args.seeds > 1 else ""))
+                out = args.out / (f"{name}_{rope}{tag}" + (f"_s{seed}" if args.seeds > 1 else ""))
                 t0 = time.perf_counter()
                 select = args.select if rope == "cosserat" else "best"
                 summary = train(out, TrainSettings(total_steps=args.steps, num_envs=args.envs,
@@ -108,10 +127,14 @@ def main() -> None:
             ref = replay(q, ref_cfg, n=args.replays, perturb=REPLAY_PERTURBATION, seed=2)
             # The reference rope's own step convergence on this trajectory (nominal
             # parameters): a whip's d_min is only as certain as these agree.
-            ref_steps = {f"{dt:g}": float(replay(q, replace(ref_cfg, integrator="stable",
-                                                            rope_dt=dt), n=1)[0])
-                         for dt in REF_CHECK_DTS} if args.ref_check else {}
+            checks = [(args.ref_elements, dt) for dt in REF_CHECK_DTS] + [
+                (n, REF_CHECK_DTS[-1]) for n in REF_CHECK_ELEMENTS]
+            ref_steps = {f"{n}@{dt:g}": float(replay(q, replace(ref_cfg, integrator="stable",
+                                                                n_elements=n, rope_dt=dt),
+                                                     n=1)[0])
+                         for n, dt in checks} if args.ref_check else {}
             row = dict(target=name, rope=rope, sim=summary["d_min"], wall=wall, seed=seed,
+                       training_rope={k: v for k, v in task.items() if k != "target"},
                        seeds=[r[3]["d_min"] for r in runs], select=summary.get("select"),
                        worst=summary.get("worst_d_min"),
                        deterministic=summary["d_min_deterministic"],
@@ -131,7 +154,8 @@ def main() -> None:
 
     print(f"\n| target | rope | sim d_min (cm) | paper sim (cm) | deterministic (cm) | "
           f"successful rollouts | open-loop replay, own rope (n={args.replays}) | replay on "
-          f"the reference rope | reference, nominal, at 1e-4 / 5e-5 / 2.5e-5 s (cm) | "
+          f"the reference rope | reference, nominal, at 1e-4 / 5e-5 / 2.5e-5 s, then 150 / 200 "
+          f"elements at 2.5e-5 s (cm) | "
           f"every seed (cm) | train wall (s) |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in rows:

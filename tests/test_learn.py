@@ -405,6 +405,13 @@ def test_train_command_writes_a_run_directory(tmp_path):
     summary = json.loads((tmp_path / "norm" / "summary.json").read_text())
     assert summary["timesteps"] == 1024 and summary["select"] == "robust"
     assert summary["worst_d_min"] >= summary["d_min"] - 1e-9
+    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
+                              "256", "--envs", "2", "--rope-dt", "0.001", "--rope-elements",
+                              "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
+                              "--no-video", "--no-progress", "--rollouts", "2"])
+    assert res.exit_code == 0, res.output  # a finer training rope, from the command line
+    task = json.loads((tmp_path / "fine" / "settings.json").read_text())["task"]
+    assert (task["n_elements"], task["order"], task["rope_dt"]) == (12, 1, 0.001)
     res = runner.invoke(app, ["train", "hit-apple"])
     assert res.exit_code != 0 and "hit-target" in res.output
     res = runner.invoke(app, ["train", "hit-target", "--rope", "chain", "--out", str(out)])

@@ -444,6 +444,8 @@ def train(
     randomise: float = typer.Option(0.0, "--randomise", min=0.0, max=0.9,
                                     help="Randomise the rope's E, density and damping by +- this fraction."),
     rope_dt: Optional[float] = typer.Option(None, "--rope-dt", help="Cosserat rope step (s), a divisor of 2 ms."),
+    rope_elements: Optional[int] = typer.Option(None, "--rope-elements", min=2, help="Elements of the Cosserat rope (task default 20)."),
+    rope_order: Optional[int] = typer.Option(None, "--rope-order", min=1, max=2, help="Cosserat rope's stable integrator: 2 BDF2 (task default), 1 backward Euler."),
     video: bool = typer.Option(True, "--video/--no-video", help="Write best_rollout.mp4."),
     normalize: bool = typer.Option(False, "--normalize", help="Normalise observations and rewards (SB3's VecNormalize)."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
@@ -463,8 +465,10 @@ def train(
     if randomise > 0:
         overrides["randomise"] = {"youngs_modulus": randomise, "density": randomise,
                                   "damping": randomise}
-    if rope_dt is not None:
-        overrides["rope_dt"] = rope_dt
+    for key, value in (("rope_dt", rope_dt), ("n_elements", rope_elements),
+                       ("order", rope_order)):
+        if value is not None:
+            overrides[key] = value
     try:
         settings = TrainSettings(total_steps=steps, num_envs=envs, seed=seed, video=video,
                                  normalize=normalize, rollouts=rollouts, select=select,
