@@ -41,7 +41,7 @@ import numpy as np
 
 TARGETS = {"high": (0.0, 2.0, 2.3), "mid": (0.0, 2.0, 1.5), "low": (0.0, 1.7, 0.5)}
 PAPER = {"high": (4.2, 4.9), "mid": (1.4, 4.4), "low": (3.3, 4.3)}  # cm: Cosserat, capsule
-REF_CHECK_DTS = (1e-4, 5e-5, 2.5e-5)  # s: the reference rope's step check (--ref-check)
+REF_CHECK_DTS = (1e-4, 5e-5, 2.5e-5, 1.25e-5, 6.25e-6)  # s: the reference's step check
 REF_CHECK_ELEMENTS = (150, 200)  # and its element check, at 2.5e-5 s
 
 
@@ -69,8 +69,8 @@ def main() -> None:
                         help="reference rope step (s) with the stable integrator")
     parser.add_argument("--ref-check", action="store_true",
                         help="also replay each trajectory once on the reference rope with its "
-                             "nominal parameters at backward-Euler steps of 1e-4, 5e-5 and "
-                             "2.5e-5 s, and with 150 and 200 elements at 2.5e-5 s (how well "
+                             "nominal parameters at backward-Euler steps of 1e-4 down to "
+                             "6.25e-6 s, and with 150 and 200 elements at 2.5e-5 s (how well "
                              "the reference itself is converged)")
     parser.add_argument("--train-elements", type=int, default=None,
                         help="elements of the Cosserat training rope (default: the task's 20)")
@@ -128,7 +128,7 @@ def main() -> None:
             # The reference rope's own step convergence on this trajectory (nominal
             # parameters): a whip's d_min is only as certain as these agree.
             checks = [(args.ref_elements, dt) for dt in REF_CHECK_DTS] + [
-                (n, REF_CHECK_DTS[-1]) for n in REF_CHECK_ELEMENTS]
+                (n, 2.5e-5) for n in REF_CHECK_ELEMENTS]
             ref_steps = {f"{n}@{dt:g}": float(replay(q, replace(ref_cfg, integrator="stable",
                                                                 n_elements=n, rope_dt=dt),
                                                      n=1)[0])
@@ -154,8 +154,8 @@ def main() -> None:
 
     print(f"\n| target | rope | sim d_min (cm) | paper sim (cm) | deterministic (cm) | "
           f"successful rollouts | open-loop replay, own rope (n={args.replays}) | replay on "
-          f"the reference rope | reference, nominal, at 1e-4 / 5e-5 / 2.5e-5 s, then 150 / 200 "
-          f"elements at 2.5e-5 s (cm) | "
+          f"the reference rope | reference, nominal, at 1e-4 / 5e-5 / 2.5e-5 / 1.25e-5 / "
+          f"6.25e-6 s, then 150 / 200 elements at 2.5e-5 s (cm) | "
           f"every seed (cm) | train wall (s) |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in rows:
