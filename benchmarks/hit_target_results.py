@@ -10,10 +10,11 @@
 3. cross-model transfer - the offline stand-in for the paper's sim-to-real table: both
    policies' trajectories replayed on a reference rope (the default rope's moduli,
    ``--ref-elements`` elements, perturbed parameters; by default the stable integrator
-   (backward Euler) at ``--ref-dt`` = 5e-5 s, 40 steps per control step: the explicit
-   integrator stops on these whips - a 100-element rope passing a fold at its step limit runs
-   away in stretch, at 5e-6 s it turns NaN - see docs/learning.md; ``--ref-integrator
-   verlet`` runs it at its limit).
+   (backward Euler) at ``--ref-dt`` = 1.25e-5 s, 160 steps per control step, its clamp carried
+   on continuously (``continuous_drivers``; with it jumped to the arm at each control step the
+   reference does not converge in its step); the explicit integrator stops on these whips - a
+   100-element rope passing a fold at its step limit runs away in stretch, at 5e-6 s it turns
+   NaN - see docs/learning.md; ``--ref-integrator verlet`` runs it at its limit).
    A replay whose rope diverged counts as "diverged", not as a distance.
 
     python benchmarks/hit_target_results.py --steps 200000 --envs 16 --out runs
@@ -42,7 +43,7 @@ import numpy as np
 TARGETS = {"high": (0.0, 2.0, 2.3), "mid": (0.0, 2.0, 1.5), "low": (0.0, 1.7, 0.5)}
 PAPER = {"high": (4.2, 4.9), "mid": (1.4, 4.4), "low": (3.3, 4.3)}  # cm: Cosserat, capsule
 REF_CHECK_DTS = (1e-4, 5e-5, 2.5e-5, 1.25e-5, 6.25e-6)  # s: the reference's step check
-REF_CHECK_ELEMENTS = (150, 200)  # and its element check, at 2.5e-5 s
+REF_CHECK_ELEMENTS = (150, 200)  # and its element check, at 1.25e-5 s
 
 
 def main() -> None:
@@ -65,13 +66,18 @@ def main() -> None:
     parser.add_argument("--ref-elements", type=int, default=100,
                         help="elements of the reference rope")
     parser.add_argument("--ref-integrator", default="stable", choices=["stable", "verlet"])
-    parser.add_argument("--ref-dt", type=float, default=5e-5,
-                        help="reference rope step (s) with the stable integrator")
+    parser.add_argument("--ref-dt", type=float, default=1.25e-5,
+                        help="reference rope step (s) with the stable integrator (5e-5 in "
+                             "the tables before 2026-12-05 17:00)")
     parser.add_argument("--ref-check", action="store_true",
                         help="also replay each trajectory once on the reference rope with its "
                              "nominal parameters at backward-Euler steps of 1e-4 down to "
-                             "6.25e-6 s, and with 150 and 200 elements at 2.5e-5 s (how well "
+                             "6.25e-6 s, and with 150 and 200 elements at 1.25e-5 s (how well "
                              "the reference itself is converged)")
+    parser.add_argument("--ref-jumps", action="store_true",
+                        help="the reference rope's clamp jumped to the arm's frame at each "
+                             "control step (the tables before 2026-12-05 17:00) instead of "
+                             "carried on continuously")
     parser.add_argument("--train-elements", type=int, default=None,
                         help="elements of the Cosserat training rope (default: the task's 20)")
     parser.add_argument("--train-dt", type=float, default=None,
@@ -122,13 +128,16 @@ def main() -> None:
             if args.ref_integrator == "stable":
                 ref_dt = args.ref_dt
             # backward Euler: the reference of every table so far (docs/learning.md)
+            # the clamp carried on continuously: with it jumped to the arm at each control step
+            # the sub-stepped reference does not converge in its step (docs/learning.md)
             ref_cfg = replace(cfg, rope="cosserat", integrator=args.ref_integrator,
-                              n_elements=args.ref_elements, rope_dt=ref_dt, order=1)
+                              n_elements=args.ref_elements, rope_dt=ref_dt, order=1,
+                              continuous_drivers=not args.ref_jumps)
             ref = replay(q, ref_cfg, n=args.replays, perturb=REPLAY_PERTURBATION, seed=2)
             # The reference rope's own step convergence on this trajectory (nominal
             # parameters): a whip's d_min is only as certain as these agree.
             checks = [(args.ref_elements, dt) for dt in REF_CHECK_DTS] + [
-                (n, 2.5e-5) for n in REF_CHECK_ELEMENTS]
+                (n, 1.25e-5) for n in REF_CHECK_ELEMENTS]
             ref_steps = {f"{n}@{dt:g}": float(replay(q, replace(ref_cfg, integrator="stable",
                                                                 n_elements=n, rope_dt=dt),
                                                      n=1)[0])
@@ -155,7 +164,7 @@ def main() -> None:
     print(f"\n| target | rope | sim d_min (cm) | paper sim (cm) | deterministic (cm) | "
           f"successful rollouts | open-loop replay, own rope (n={args.replays}) | replay on "
           f"the reference rope | reference, nominal, at 1e-4 / 5e-5 / 2.5e-5 / 1.25e-5 / "
-          f"6.25e-6 s, then 150 / 200 elements at 2.5e-5 s (cm) | "
+          f"6.25e-6 s, then 150 / 200 elements at 1.25e-5 s (cm) | "
           f"every seed (cm) | train wall (s) |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in rows:

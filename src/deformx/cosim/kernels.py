@@ -7,12 +7,19 @@ coupling of one body cost more than the rod and MuJoCo steps together.
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from ..engine.kernels.bundles import D_A, D_AL, D_P, D_R, D_V, D_W
 
 # Columns of a body-motion row (see ``body_motions``).
 M_P, M_R, M_V, M_W, M_A, M_AL, M_COM, M_COLS = 0, 3, 12, 15, 18, 21, 24, 27
+
+# How far a driver's extrapolated pose may end from its body's frame and still be carried on
+# continuously (drive_rows): well above an arm's per-step extrapolation miss (~10-100 um),
+# well below a reset.
+CONTINUOUS_POSITION = 2e-3  # m
+CONTINUOUS_ANGLE = 0.05  # rad
 
 
 @njit(cache=True)
@@ -45,36 +52,66 @@ def body_motions(ids, rootid, xpos, xmat, subtree_com, cvel, cacc, xipos, gravit
 
 
 @njit(cache=True)
-def drive_rows(rows, index, body, off, rot, motion, origin) -> None:
+def drive_rows(rows, index, body, off, rot, motion, origin, inv_T, reach) -> None:
     """Driver ``index[k]`` (a row of the world's driver table) takes the motion of the frame
-    at ``off[k]`` / ``rot[k]`` in body ``body[k]`` (a row of ``motion``, M_* columns):
-    pose, velocity and acceleration of its origin (rigid-body kinematics), the body's angular
-    velocity and acceleration; ``origin[k]`` keeps its position."""
+    at ``off[k]`` / ``rot[k]`` in body ``body[k]`` (a row of ``motion``, M_* columns): pose,
+    velocity and acceleration of its origin (rigid-body kinematics), the body's angular
+    velocity and acceleration; ``origin[k]`` keeps the driver's position.
+
+    With ``reach`` >= 0 (``CONTINUOUS_POSITION``) the pose stays continuous: where the
+    driver's own extrapolation over the last macro step (``1 / inv_T`` s) ended within
+    ``reach`` (m) and ``CONTINUOUS_ANGLE`` of the frame, the driver keeps its pose and makes
+    up the difference over the coming macro step (velocity + miss / T); only a farther frame
+    (a reset, a teleport) is jumped to. A jump of the held node at each macro step, however
+    small (the extrapolation misses the backend's own integration by ~a T^2 / 2: tens of um
+    on an arm), is one rod substep's worth of velocity, so it kicks a rod the harder the
+    finer its substeps, and the rod then does not converge as its step shrinks
+    (docs/learning.md)."""
+    Rb = np.empty(9)
+    E = np.empty(9)
     for k in range(body.shape[0]):
         b, d = body[k], index[k]
         o0, o1, o2 = off[k, 0], off[k, 1], off[k, 2]
         r0 = motion[b, M_R] * o0 + motion[b, M_R + 1] * o1 + motion[b, M_R + 2] * o2
         r1 = motion[b, M_R + 3] * o0 + motion[b, M_R + 4] * o1 + motion[b, M_R + 5] * o2
         r2 = motion[b, M_R + 6] * o0 + motion[b, M_R + 7] * o1 + motion[b, M_R + 8] * o2
-        origin[k, 0] = rows[d, D_P] = motion[b, M_P] + r0
-        origin[k, 1] = rows[d, D_P + 1] = motion[b, M_P + 1] + r1
-        origin[k, 2] = rows[d, D_P + 2] = motion[b, M_P + 2] + r2
+        p0, p1, p2 = motion[b, M_P] + r0, motion[b, M_P + 1] + r1, motion[b, M_P + 2] + r2
         for i in range(3):
             for j in range(3):
-                rows[d, D_R + 3 * i + j] = (motion[b, M_R + 3 * i] * rot[k, 0, j]
-                                            + motion[b, M_R + 3 * i + 1] * rot[k, 1, j]
-                                            + motion[b, M_R + 3 * i + 2] * rot[k, 2, j])
+                Rb[3 * i + j] = (motion[b, M_R + 3 * i] * rot[k, 0, j]
+                                 + motion[b, M_R + 3 * i + 1] * rot[k, 1, j]
+                                 + motion[b, M_R + 3 * i + 2] * rot[k, 2, j])
+        # the misses: position, and the rotation Rb Rd^T from the driver's frame to the body's
+        e0, e1, e2 = p0 - rows[d, D_P], p1 - rows[d, D_P + 1], p2 - rows[d, D_P + 2]
+        for i in range(3):
+            for j in range(3):
+                E[3 * i + j] = (Rb[3 * i] * rows[d, D_R + 3 * j]
+                                + Rb[3 * i + 1] * rows[d, D_R + 3 * j + 1]
+                                + Rb[3 * i + 2] * rows[d, D_R + 3 * j + 2])
+        f0, f1, f2 = 0.5 * (E[7] - E[5]), 0.5 * (E[2] - E[6]), 0.5 * (E[3] - E[1])  # ~angle
+        near = (e0 * e0 + e1 * e1 + e2 * e2 <= reach * reach and reach >= 0.0
+                and f0 * f0 + f1 * f1 + f2 * f2 <= CONTINUOUS_ANGLE ** 2
+                and E[0] + E[4] + E[8] > 2.0)  # (not a half turn, where sin is small too)
+        if not near:
+            rows[d, D_P], rows[d, D_P + 1], rows[d, D_P + 2] = p0, p1, p2
+            for j in range(9):
+                rows[d, D_R + j] = Rb[j]
+            e0 = e1 = e2 = f0 = f1 = f2 = 0.0
+        for j in range(3):
+            origin[k, j] = rows[d, D_P + j]
         w0, w1, w2 = motion[b, M_W], motion[b, M_W + 1], motion[b, M_W + 2]
         a0, a1, a2 = motion[b, M_AL], motion[b, M_AL + 1], motion[b, M_AL + 2]
         x0, x1, x2 = w1 * r2 - w2 * r1, w2 * r0 - w0 * r2, w0 * r1 - w1 * r0  # w x r
-        rows[d, D_V] = motion[b, M_V] + x0
-        rows[d, D_V + 1] = motion[b, M_V + 1] + x1
-        rows[d, D_V + 2] = motion[b, M_V + 2] + x2
+        rows[d, D_V] = motion[b, M_V] + x0 + inv_T * e0
+        rows[d, D_V + 1] = motion[b, M_V + 1] + x1 + inv_T * e1
+        rows[d, D_V + 2] = motion[b, M_V + 2] + x2 + inv_T * e2
         rows[d, D_A] = motion[b, M_A] + a1 * r2 - a2 * r1 + w1 * x2 - w2 * x1
         rows[d, D_A + 1] = motion[b, M_A + 1] + a2 * r0 - a0 * r2 + w2 * x0 - w0 * x2
         rows[d, D_A + 2] = motion[b, M_A + 2] + a0 * r1 - a1 * r0 + w0 * x1 - w1 * x0
+        rows[d, D_W] = motion[b, M_W] + inv_T * f0
+        rows[d, D_W + 1] = motion[b, M_W + 1] + inv_T * f1
+        rows[d, D_W + 2] = motion[b, M_W + 2] + inv_T * f2
         for j in range(3):
-            rows[d, D_W + j] = motion[b, M_W + j]
             rows[d, D_AL + j] = motion[b, M_AL + j]
 
 

@@ -145,7 +145,8 @@ class HitTargetBatch:
                     stretch_modulus=cfg.stretch_modulus, shear_modulus=cfg.shear_modulus,
                     twist_modulus=cfg.twist_of(p["youngs_modulus"]))))
             world.add_plane(stiffness=cfg.ground_stiffness)
-            self.sim = cosim.CoSimulation(world, be)
+            self.sim = cosim.CoSimulation(world, be,
+                                          continuous_drivers=cfg.continuous_drivers)
             for i, rod in enumerate(self.rods):
                 self.sim.attach(rod, "start", body=f"e{i}_tool_tip", frame=cfg.clamp_frame)
             self.ropes = [cosim.RodRope(rod) for rod in self.rods]

@@ -47,6 +47,9 @@ class HitTargetConfig:
     integrator: str = "stable"               # Cosserat rope: "stable" or "verlet" (explicit)
     order: int = 2                           # stable integrator: 2 BDF2, 1 backward Euler
     ground_stiffness: float = 100.0          # N/m per node
+    # the clamp carried on continuously across control steps (CoSimulation's
+    # continuous_drivers): what a sub-stepped reference rope needs to converge in its step
+    continuous_drivers: bool = False
     clamp_frame: bool = True                 # the rope's first element turns with the stick
     capsule_damping: float = 1e-2            # N m s/rad per joint of the capsule rope
     capsule_armature: float = 1e-3
