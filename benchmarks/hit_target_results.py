@@ -43,7 +43,7 @@ import numpy as np
 TARGETS = {"high": (0.0, 2.0, 2.3), "mid": (0.0, 2.0, 1.5), "low": (0.0, 1.7, 0.5)}
 PAPER = {"high": (4.2, 4.9), "mid": (1.4, 4.4), "low": (3.3, 4.3)}  # cm: Cosserat, capsule
 REF_CHECK_DTS = (1e-4, 5e-5, 2.5e-5, 1.25e-5, 6.25e-6)  # s: the reference's step check
-REF_CHECK_ELEMENTS = (150, 200)  # and its element check, at 1.25e-5 s
+REF_CHECK_ELEMENTS, REF_CHECK_ELEMENTS_DT = (150, 200), 1.25e-5  # its element check
 
 
 def main() -> None:
@@ -137,7 +137,7 @@ def main() -> None:
             # The reference rope's own step convergence on this trajectory (nominal
             # parameters): a whip's d_min is only as certain as these agree.
             checks = [(args.ref_elements, dt) for dt in REF_CHECK_DTS] + [
-                (n, 1.25e-5) for n in REF_CHECK_ELEMENTS]
+                (n, REF_CHECK_ELEMENTS_DT) for n in REF_CHECK_ELEMENTS]
             ref_steps = {f"{n}@{dt:g}": float(replay(q, replace(ref_cfg, integrator="stable",
                                                                 n_elements=n, rope_dt=dt),
                                                      n=1)[0])

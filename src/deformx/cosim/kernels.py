@@ -81,17 +81,21 @@ def drive_rows(rows, index, body, off, rot, motion, origin, inv_T, reach) -> Non
                 Rb[3 * i + j] = (motion[b, M_R + 3 * i] * rot[k, 0, j]
                                  + motion[b, M_R + 3 * i + 1] * rot[k, 1, j]
                                  + motion[b, M_R + 3 * i + 2] * rot[k, 2, j])
-        # the misses: position, and the rotation Rb Rd^T from the driver's frame to the body's
-        e0, e1, e2 = p0 - rows[d, D_P], p1 - rows[d, D_P + 1], p2 - rows[d, D_P + 2]
-        for i in range(3):
-            for j in range(3):
-                E[3 * i + j] = (Rb[3 * i] * rows[d, D_R + 3 * j]
-                                + Rb[3 * i + 1] * rows[d, D_R + 3 * j + 1]
-                                + Rb[3 * i + 2] * rows[d, D_R + 3 * j + 2])
-        f0, f1, f2 = 0.5 * (E[7] - E[5]), 0.5 * (E[2] - E[6]), 0.5 * (E[3] - E[1])  # ~angle
-        near = (e0 * e0 + e1 * e1 + e2 * e2 <= reach * reach and reach >= 0.0
-                and f0 * f0 + f1 * f1 + f2 * f2 <= CONTINUOUS_ANGLE ** 2
-                and E[0] + E[4] + E[8] > 2.0)  # (not a half turn, where sin is small too)
+        e0 = e1 = e2 = f0 = f1 = f2 = 0.0
+        near = False
+        if reach >= 0.0:
+            # the misses: position, and the rotation Rb Rd^T from the driver's frame to the body's
+            e0, e1, e2 = p0 - rows[d, D_P], p1 - rows[d, D_P + 1], p2 - rows[d, D_P + 2]
+            for i in range(3):
+                for j in range(3):
+                    E[3 * i + j] = (Rb[3 * i] * rows[d, D_R + 3 * j]
+                                    + Rb[3 * i + 1] * rows[d, D_R + 3 * j + 1]
+                                    + Rb[3 * i + 2] * rows[d, D_R + 3 * j + 2])
+            # its skew part: sin(angle) times the axis, the angle itself to 4e-4 within reach
+            f0, f1, f2 = 0.5 * (E[7] - E[5]), 0.5 * (E[2] - E[6]), 0.5 * (E[3] - E[1])
+            near = (e0 * e0 + e1 * e1 + e2 * e2 <= reach * reach
+                    and f0 * f0 + f1 * f1 + f2 * f2 <= CONTINUOUS_ANGLE ** 2
+                    and E[0] + E[4] + E[8] > 2.0)  # (not a half turn, where sin is small too)
         if not near:
             rows[d, D_P], rows[d, D_P + 1], rows[d, D_P + 2] = p0, p1, p2
             for j in range(9):
