@@ -85,6 +85,10 @@ def main() -> None:
     parser.add_argument("--train-order", type=int, default=None, choices=[1, 2],
                         help="stable integrator order of the Cosserat training rope (default: "
                              "the task's BDF2)")
+    parser.add_argument("--train-randomise", type=float, default=None,
+                        help="train on Cosserat ropes whose E, density and damping are drawn "
+                             "+- this fraction at every reset (as `deformx train hit-target "
+                             "--randomise`); trajectories are still sampled on the nominal rope")
     args = parser.parse_args()
     from deformx.engine.rod import explicit_time_step
     from deformx.learn.task import HitTargetConfig
@@ -103,6 +107,10 @@ def main() -> None:
                     if arg is not None:
                         task[key] = arg
                         tag += f"_{short}{arg:g}"
+                if args.train_randomise:
+                    task["randomise"] = dict.fromkeys(("youngs_modulus", "density", "damping"),
+                                                      args.train_randomise)
+                    tag += f"_r{args.train_randomise:g}"
             runs = []
             for seed in range(args.seeds):  # resumable: a finished run only re-evaluates
                 out = args.out / (f"{name}_{rope}{tag}" + (f"_s{seed}" if args.seeds > 1 else ""))
@@ -118,7 +126,7 @@ def main() -> None:
                 print(f"{name} {rope} seed {seed}: {100 * summary['d_min']:.1f} cm", flush=True)
             _, seed, out, summary, wall = min(runs, key=lambda r: r[0])
             _, q = load_trajectory(out / "best_rollout.csv")
-            cfg = HitTargetConfig(**task)
+            cfg = HitTargetConfig(**dict(task, randomise={}))  # replays draw their own
             same = replay(q, cfg, n=args.replays, perturb=REPLAY_PERTURBATION, seed=1)
             limit = explicit_time_step(cfg.rope_length / args.ref_elements, cfg.radius,
                                        cfg.density, max(cfg.youngs_modulus,

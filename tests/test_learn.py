@@ -379,6 +379,7 @@ def test_train_command_writes_a_run_directory(tmp_path):
     from typer.testing import CliRunner
 
     from deformx.cli import app
+    from deformx.learn.train import load_trajectory, replay
 
     runner = CliRunner()
     out = tmp_path / "run"
@@ -408,10 +409,16 @@ def test_train_command_writes_a_run_directory(tmp_path):
     res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
                               "256", "--envs", "2", "--rope-dt", "0.001", "--rope-elements",
                               "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
-                              "--no-video", "--no-progress", "--rollouts", "2"])
+                              "--no-video", "--no-progress", "--rollouts", "2",
+                              "--randomise", "0.3"])
     assert res.exit_code == 0, res.output  # a finer training rope, from the command line
     task = json.loads((tmp_path / "fine" / "settings.json").read_text())["task"]
     assert (task["n_elements"], task["order"], task["rope_dt"]) == (12, 1, 0.001)
+    # trained on randomised ropes, its trajectory is chosen and scored on the nominal one
+    _, q = load_trajectory(tmp_path / "fine" / "best_rollout.csv")
+    nominal = HitTargetConfig(target=(0.0, 1.0, 0.6), n_elements=12, order=1, rope_dt=1e-3)
+    d_min = json.loads((tmp_path / "fine" / "summary.json").read_text())["d_min"]
+    assert replay(q, nominal)[0] == pytest.approx(d_min, abs=1e-6)  # (the CSV: 1e-9 rad)
     res = runner.invoke(app, ["train", "hit-apple"])
     assert res.exit_code != 0 and "hit-target" in res.output
     res = runner.invoke(app, ["train", "hit-target", "--rope", "chain", "--out", str(out)])

@@ -226,7 +226,9 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
                              deterministic=True)[0]
 
     # As the paper deploys it: the trained policy generates joint-command trajectories in
-    # simulation (its own exploration noise), and the best one is replayed open loop.
+    # simulation (its own exploration noise), and the best one is replayed open loop - on the
+    # nominal rope, also where training randomised it (and the robust choice's other models).
+    config = replace(config, randomise={})
     samples = sample_rollouts(mean_action, config, n=settings.rollouts, std=settings.std,
                               seed=settings.seed)
     score = np.where(samples["diverged"], np.inf, samples["d_min"])
