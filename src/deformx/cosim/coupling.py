@@ -24,8 +24,8 @@ from ..engine.rod import Rod
 from ..engine.running import callback_periods, progress_bar
 from ..engine.world import World
 from .backend import Backend, BodyMotion, Geom
-from .kernels import (CONTINUOUS_POSITION, M_A, M_AL, M_COLS, M_COM, M_P, M_R, M_V, M_W,
-                      drive_rows, wrenches_from_impulses)
+from .kernels import (CONTINUOUS_POSITION, CONTINUOUS_STEPS, M_A, M_AL, M_COLS, M_COM, M_P,
+                      M_R, M_V, M_W, drive_rows, wrenches_from_impulses)
 
 
 @dataclass
@@ -102,13 +102,13 @@ class CoSimulation:
     its weight's share in every case.
 
     ``continuous_drivers``: a driver whose extrapolation over the last macro step ended near
-    its body's frame keeps its pose and makes up the miss over the coming step (velocity +
-    miss / T) instead of jumping to the frame (``kernels.drive_rows``). The miss (~a T^2 / 2,
-    the substeps' extrapolation against the backend's own integration) jumped in one substep
+    its body's frame keeps its pose and makes up the miss over the coming macro steps
+    (velocity + miss / (``kernels.CONTINUOUS_STEPS`` T)) instead of jumping to the frame
+    (``kernels.drive_rows``). The miss (~a T^2 / 2, the substeps' extrapolation against the
+    backend's own integration, and the body's answer to the last wrench) jumped in one substep
     kicks the held rod harder the finer its substeps: with the jumps, a whipped rope's d_min
     moved by 5-25 cm per halving of its step down to 3e-6 s; with continuous drivers it settles
-    (docs/learning.md). Off by default: it delays the rods' view of the body's answer to their
-    wrench by a macro step, and the hanging hit-target rope at BDF2 1e-4 s then rings.
+    (docs/learning.md). Off by default (the tables so far were made without it).
     """
 
     def __init__(self, world: World, backend: Backend, substeps: int | None = None,
@@ -368,7 +368,7 @@ class CoSimulation:
             return
         table = self.world.driver_table
         drive_rows(table.rows, self._drv_index, self._drv_body, self._drv_off, self._drv_rot, m,
-                   self._origin, 1.0 / (self.world.dt * self.substeps),
+                   self._origin, 1.0 / (CONTINUOUS_STEPS * self.world.dt * self.substeps),
                    CONTINUOUS_POSITION if self.continuous_drivers else -1.0)
         table.reset_impulses(self._drv_index)
 
