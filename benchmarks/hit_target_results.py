@@ -25,6 +25,8 @@
         --ropes cosserat --out runs    # + the reference's own step and element convergence
     python benchmarks/hit_target_results.py --normalize --seeds 4 --ropes cosserat --ref-check \
         --train-elements 40 --train-dt 1e-4 --train-order 1 --out runs   # a finer training rope
+    python benchmarks/hit_target_results.py --normalize --seeds 2 --ropes cosserat \
+        --train-elements 40 --train-dt 1e-4 --train-order 1 --train-randomise 0.2 --out runs
 """
 
 from __future__ import annotations
