@@ -93,7 +93,7 @@ def main() -> None:
                              "--randomise`); trajectories are still sampled on the nominal rope")
     args = parser.parse_args()
     from deformx.engine.rod import explicit_time_step
-    from deformx.learn.task import HitTargetConfig
+    from deformx.learn.task import RANDOMISABLE, HitTargetConfig
     from deformx.learn.train import (REPLAY_PERTURBATION, TrainSettings, load_trajectory,
                                      replay, train)
 
@@ -110,8 +110,7 @@ def main() -> None:
                         task[key] = arg
                         tag += f"_{short}{arg:g}"
                 if args.train_randomise:
-                    task["randomise"] = dict.fromkeys(("youngs_modulus", "density", "damping"),
-                                                      args.train_randomise)
+                    task["randomise"] = dict.fromkeys(RANDOMISABLE, args.train_randomise)
                     tag += f"_r{args.train_randomise:g}"
             runs = []
             for seed in range(args.seeds):  # resumable: a finished run only re-evaluates

@@ -539,7 +539,7 @@ def test_continuous_drivers_let_a_sub_stepped_held_rope_converge_in_its_step():
     """The arm swings the task rope gently for 0.2 s, backward Euler at 2e-4 ... 2.5e-5 s.
     With the clamp jumped to the arm's frame at each control step, halving the rope's step
     moves its tip more each time (the jump is one substep's worth of velocity); carried on
-    continuously, the differences shrink (measured: 0.75 / 1.22 / 2.23 cm against 0.68 / 0.40
+    continuously, the differences shrink (measured: 0.75 / 1.22 / 2.23 cm against 0.69 / 0.41
     / 0.27 cm)."""
     from deformx.learn.batch import HitTargetBatch
 

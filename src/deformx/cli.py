@@ -463,8 +463,9 @@ def train(
         _fail(f"{err}")
     overrides: dict = {"target": tuple(target), "rope": rope}
     if randomise > 0:
-        overrides["randomise"] = {"youngs_modulus": randomise, "density": randomise,
-                                  "damping": randomise}
+        from .learn.task import RANDOMISABLE
+
+        overrides["randomise"] = dict.fromkeys(RANDOMISABLE, randomise)
     for key, value in (("rope_dt", rope_dt), ("n_elements", rope_elements),
                        ("order", rope_order)):
         if value is not None:

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from .task import HitTargetConfig, initial_rope, rot_x
+from .task import RANDOMISABLE, HitTargetConfig, initial_rope, rot_x
 
 
 class HitTargetBatch:
@@ -40,7 +40,7 @@ class HitTargetBatch:
         self.n = int(n)
         self.origins = np.zeros((self.n, 3))
         self.origins[:, 0] = spacing * np.arange(self.n)
-        base = {k: getattr(cfg, k) for k in ("youngs_modulus", "density", "damping")}
+        base = {k: getattr(cfg, k) for k in RANDOMISABLE}
         self.params = [dict(base, **(params[i] if params else {})) for i in range(self.n)]
         self._target = np.asarray(cfg.target, dtype=np.float64)
         self._active = np.asarray(cfg.active_joints, dtype=np.int64)

@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 ROPES = ("cosserat", "capsule")
+# The rope parameters a task may randomise (HitTargetConfig.randomise keys).
+RANDOMISABLE = ("youngs_modulus", "density", "damping")
 
 
 @dataclass
@@ -106,7 +108,7 @@ class HitTargetConfig:
                 raise ValueError(f"{name} must be > 0 Pa or None, got {getattr(self, name)!r}")
         if self.distance not in ("plane", "3d"):
             raise ValueError(f"distance must be 'plane' or '3d', got {self.distance!r}")
-        unknown = set(self.randomise) - {"youngs_modulus", "density", "damping"}
+        unknown = set(self.randomise) - set(RANDOMISABLE)
         if unknown:
             raise ValueError(f"randomise: only youngs_modulus, density and damping, got "
                              f"{sorted(unknown)}")
