@@ -27,6 +27,9 @@
         --train-elements 40 --train-dt 1e-4 --train-order 1 --out runs   # a finer training rope
     python benchmarks/hit_target_results.py --normalize --seeds 2 --ropes cosserat \
         --train-elements 40 --train-dt 1e-4 --train-order 1 --train-randomise 0.2 --out runs
+    python benchmarks/hit_target_results.py --steps 400000 --normalize --seeds 4 --targets mid \
+        --ropes cosserat --train-elements 100 --train-dt 1e-4 --train-order 1 \
+        --train-continuous --out runs   # the reference's elements and clamp, 8x its step
 """
 
 from __future__ import annotations
@@ -91,6 +94,10 @@ def main() -> None:
                         help="train on Cosserat ropes whose E, density and damping are drawn "
                              "+- this fraction at every reset (as `deformx train hit-target "
                              "--randomise`); trajectories are still sampled on the nominal rope")
+    parser.add_argument("--train-continuous", action="store_true",
+                        help="carry the Cosserat training rope's clamp on continuously between "
+                             "control steps, as the reference's (HitTargetConfig."
+                             "continuous_drivers)")
     args = parser.parse_args()
     from deformx.engine.rod import explicit_time_step
     from deformx.learn.task import RANDOMISABLE, HitTargetConfig
@@ -112,6 +119,9 @@ def main() -> None:
                 if args.train_randomise:
                     task["randomise"] = dict.fromkeys(RANDOMISABLE, args.train_randomise)
                     tag += f"_r{args.train_randomise:g}"
+                if args.train_continuous:
+                    task["continuous_drivers"] = True
+                    tag += "_c"
             runs = []
             for seed in range(args.seeds):  # resumable: a finished run only re-evaluates
                 out = args.out / (f"{name}_{rope}{tag}" + (f"_s{seed}" if args.seeds > 1 else ""))
