@@ -110,8 +110,8 @@ class HitTargetConfig:
             raise ValueError(f"distance must be 'plane' or '3d', got {self.distance!r}")
         unknown = set(self.randomise) - set(RANDOMISABLE)
         if unknown:
-            raise ValueError(f"randomise: only youngs_modulus, density and damping, got "
-                             f"{sorted(unknown)}")
+            raise ValueError(f"randomise: only {', '.join(RANDOMISABLE[:-1])} and "
+                             f"{RANDOMISABLE[-1]}, got {sorted(unknown)}")
 
     def twist_of(self, youngs_modulus: float) -> float:
         """The rope's twist modulus (Pa) for a bending modulus ``youngs_modulus`` (Pa)."""
