@@ -27,6 +27,8 @@
         --train-elements 40 --train-dt 1e-4 --train-order 1 --out runs   # a finer training rope
     python benchmarks/hit_target_results.py --normalize --seeds 2 --ropes cosserat \
         --train-elements 40 --train-dt 1e-4 --train-order 1 --train-randomise 0.2 --out runs
+    (a sub-stepped training rope's clamp is carried on continuously by default since
+    2026-12-06; ``--train-jumps`` trains as the tables before that date)
     python benchmarks/hit_target_results.py --steps 400000 --normalize --seeds 4 --targets mid \
         --ropes cosserat --train-elements 100 --train-dt 1e-4 --train-order 1 \
         --train-continuous --out runs   # the reference's elements and clamp, 8x its step
@@ -94,10 +96,16 @@ def main() -> None:
                         help="train on Cosserat ropes whose E, density and damping are drawn "
                              "+- this fraction at every reset (as `deformx train hit-target "
                              "--randomise`); trajectories are still sampled on the nominal rope")
-    parser.add_argument("--train-continuous", action="store_true",
-                        help="carry the Cosserat training rope's clamp on continuously between "
-                             "control steps, as the reference's (HitTargetConfig."
-                             "continuous_drivers)")
+    clamp = parser.add_mutually_exclusive_group()
+    clamp.add_argument("--train-continuous", action="store_true",
+                       help="carry the Cosserat training rope's clamp on continuously between "
+                            "control steps, as the reference's (HitTargetConfig."
+                            "continuous_drivers; the task's default where --train-dt sub-steps "
+                            "the control step)")
+    clamp.add_argument("--train-jumps", action="store_true",
+                       help="jump the Cosserat training rope's clamp to the arm's frame at each "
+                            "control step (the task's default with one rope step per control "
+                            "step; how sub-stepped training ropes ran before 2026-12-06)")
     args = parser.parse_args()
     from deformx.engine.rod import explicit_time_step
     from deformx.learn.task import RANDOMISABLE, HitTargetConfig
@@ -119,8 +127,12 @@ def main() -> None:
                 if args.train_randomise:
                     task["randomise"] = dict.fromkeys(RANDOMISABLE, args.train_randomise)
                     tag += f"_r{args.train_randomise:g}"
-                if args.train_continuous:
-                    task["continuous_drivers"] = True
+                # the clamp as run: continuous ("_c") where asked or, by default, where the
+                # rope is sub-stepped; untagged run directories hold jumped clamps
+                if args.train_continuous or args.train_jumps:
+                    task["continuous_drivers"] = bool(args.train_continuous)
+                if args.train_continuous or (not args.train_jumps and args.train_dt is not None
+                                             and args.train_dt < 0.999 * 2e-3):
                     tag += "_c"
             runs = []
             for seed in range(args.seeds):  # resumable: a finished run only re-evaluates

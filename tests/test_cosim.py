@@ -169,26 +169,32 @@ def test_attach_checks_its_arguments():
 
 def test_rope_converges_as_substeps_grow_explicit_integrator():
     """A rope hanging from a sprung carriage (kinematic coupling, explicit steps): the tip
-    after 0.2 s approaches the finest run as the substeps per 2 ms macro step grow."""
+    after 0.2 s approaches the finest run as the substeps per 2 ms macro step grow, with the
+    clamp jumped to the carriage at each macro step and, closer at every count (the default
+    with substeps), carried on continuously (measured: 2.45 / 0.75 / 0.30 um against 0.58 /
+    0.43 / 0.25 um at 10 / 20 / 40 substeps)."""
     xml = """<mujoco><option timestep="0.002"/><worldbody>
       <body name="carriage" pos="0 0 1"><joint type="slide" axis="1 0 0" stiffness="40"/>
         <geom type="sphere" size="0.02" mass="0.3" contype="0" conaffinity="0"/></body>
       </worldbody></mujoco>"""
 
-    def tip(substeps):
+    def tip(substeps, continuous):
         world = dx.World(dt=2e-3 / substeps)
         rod = world.add_rod(_rope((0, 0, 1), (0, 0, -1), length=0.3, n=10, damping=0.5))
         backend = cosim.MujocoBackend(xml)
         backend.data.qvel[0] = 0.5
-        sim = cosim.CoSimulation(world, backend)
+        sim = cosim.CoSimulation(world, backend, continuous_drivers=continuous)
         sim.attach(rod, "start", body="carriage")
         sim.run(0.2)
         return rod.positions[-1].copy()
 
-    ref = tip(160)
-    errors = [np.linalg.norm(tip(n) - ref) for n in (10, 20, 40)]
-    assert errors[0] > errors[1] > errors[2]
-    assert errors[2] < 0.3 * errors[0]
+    errors = {}
+    for continuous in (False, True):
+        ref = tip(160, continuous)
+        errors[continuous] = [np.linalg.norm(tip(n, continuous) - ref) for n in (10, 20, 40)]
+        assert errors[continuous][0] > errors[continuous][1] > errors[continuous][2]
+    assert errors[False][2] < 0.3 * errors[False][0]
+    assert all(c < j for c, j in zip(errors[True], errors[False])), errors
 
 
 def test_calibration_experiment_runs_with_both_rope_models(tmp_path):

@@ -553,13 +553,19 @@ def test_continuous_drivers_let_a_sub_stepped_held_rope_converge_in_its_step():
         return np.array(out)
 
     dts = (2e-4, 1e-4, 5e-5, 2.5e-5)
-    gaps = {}
+    gaps, last = {}, {}
     for continuous in (False, True):
         x = [tips(continuous, dt) for dt in dts]
         gaps[continuous] = [np.abs(a - b).max() for a, b in zip(x, x[1:])]
+        last[continuous] = x[-1]
     assert gaps[False][2] > 1.5 * gaps[False][0], gaps  # jumps: no convergence
     assert gaps[True][2] < 0.6 * gaps[True][0], gaps  # continuous: it converges
     assert gaps[True][2] < 0.25 * gaps[False][2], gaps
+    # The default (None) carries a sub-stepped rope's clamp on and jumps it with one rope step
+    # per control step (the default rope, whose tables were made so).
+    assert np.array_equal(tips(None, dts[-1]), last[True])
+    one = {c: tips(c, 2e-3) for c in (None, False, True)}
+    assert np.array_equal(one[None], one[False]) and not np.array_equal(one[None], one[True])
 
 
 def test_random_commands_rarely_halve_a_bdf2_step():

@@ -446,6 +446,7 @@ def train(
     rope_dt: Optional[float] = typer.Option(None, "--rope-dt", help="Cosserat rope step (s), a divisor of 2 ms."),
     rope_elements: Optional[int] = typer.Option(None, "--rope-elements", min=2, help="Elements of the Cosserat rope (task default 20)."),
     rope_order: Optional[int] = typer.Option(None, "--rope-order", min=1, max=2, help="Cosserat rope's stable integrator: 2 BDF2 (task default), 1 backward Euler."),
+    continuous_clamp: Optional[bool] = typer.Option(None, "--continuous-clamp/--jumped-clamp", help="Carry the Cosserat rope's clamp on continuously between control steps, or jump it to the arm at each (default: continuous where --rope-dt sub-steps the 2 ms control step)."),
     video: bool = typer.Option(True, "--video/--no-video", help="Write best_rollout.mp4."),
     normalize: bool = typer.Option(False, "--normalize", help="Normalise observations and rewards (SB3's VecNormalize)."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
@@ -467,7 +468,7 @@ def train(
 
         overrides["randomise"] = dict.fromkeys(RANDOMISABLE, randomise)
     for key, value in (("rope_dt", rope_dt), ("n_elements", rope_elements),
-                       ("order", rope_order)):
+                       ("order", rope_order), ("continuous_drivers", continuous_clamp)):
         if value is not None:
             overrides[key] = value
     try:

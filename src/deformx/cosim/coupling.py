@@ -108,11 +108,14 @@ class CoSimulation:
     backend's own integration, and the body's answer to the last wrench) jumped in one substep
     kicks the held rod harder the finer its substeps: with the jumps, a whipped rope's d_min
     moved by 5-25 cm per halving of its step down to 3e-6 s; with continuous drivers it settles
-    (docs/learning.md). Off by default (the tables so far were made without it).
+    (docs/learning.md). ``None`` (default): on where the rods take several substeps per macro
+    step, off with one (the miss then moves the held node within its only step, a nudge of
+    tens of micrometres rather than a kick, and the tables of docs/learning.md were made so).
     """
 
     def __init__(self, world: World, backend: Backend, substeps: int | None = None,
-                 smooth_feedback: bool = True, continuous_drivers: bool = False) -> None:
+                 smooth_feedback: bool = True,
+                 continuous_drivers: bool | None = None) -> None:
         if not isinstance(world, World):
             raise ValueError(f"world must be a deformx.World, got {type(world).__name__}")
         self.world = world
@@ -132,7 +135,8 @@ class CoSimulation:
             world.dt = T / n
         self.substeps = n
         self.smooth_feedback = bool(smooth_feedback)
-        self.continuous_drivers = bool(continuous_drivers)
+        self.continuous_drivers = (n > 1 if continuous_drivers is None
+                                   else bool(continuous_drivers))
         # the drivers' wrench of the last macro step, per body of _coupled (smooth_feedback)
         self.held_wrenches: np.ndarray | None = None
         self.attachments: list[Attachment] = []

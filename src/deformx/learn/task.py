@@ -50,8 +50,9 @@ class HitTargetConfig:
     order: int = 2                           # stable integrator: 2 BDF2, 1 backward Euler
     ground_stiffness: float = 100.0          # N/m per node
     # the clamp carried on continuously across control steps (CoSimulation's
-    # continuous_drivers): what a sub-stepped reference rope needs to converge in its step
-    continuous_drivers: bool = False
+    # continuous_drivers): what a sub-stepped rope needs to converge in its step; None: on
+    # when rope_dt sub-steps the control step, off with one rope step per control step
+    continuous_drivers: bool | None = None
     clamp_frame: bool = True                 # the rope's first element turns with the stick
     capsule_damping: float = 1e-2            # N m s/rad per joint of the capsule rope
     capsule_armature: float = 1e-3
