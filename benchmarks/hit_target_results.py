@@ -107,6 +107,7 @@ def main() -> None:
                             "control step (the task's default with one rope step per control "
                             "step; how sub-stepped training ropes ran before 2026-12-06)")
     args = parser.parse_args()
+    from deformx.cosim.coupling import continuous_by_default
     from deformx.engine.rod import explicit_time_step
     from deformx.learn.task import RANDOMISABLE, HitTargetConfig
     from deformx.learn.train import (REPLAY_PERTURBATION, TrainSettings, load_trajectory,
@@ -131,9 +132,11 @@ def main() -> None:
                 # rope is sub-stepped; untagged run directories hold jumped clamps
                 if args.train_continuous or args.train_jumps:
                     task["continuous_drivers"] = bool(args.train_continuous)
-                if args.train_continuous or (not args.train_jumps and args.train_dt is not None
-                                             and args.train_dt < 0.999 * 2e-3):
-                    tag += "_c"
+                trained = HitTargetConfig(**task)
+                continuous = trained.continuous_drivers
+                if continuous is None:  # the co-simulation's own rule
+                    continuous = continuous_by_default(round(trained.control_dt / trained.rope_dt))
+                tag += "_c" if continuous else ""
             runs = []
             for seed in range(args.seeds):  # resumable: a finished run only re-evaluates
                 out = args.out / (f"{name}_{rope}{tag}" + (f"_s{seed}" if args.seeds > 1 else ""))

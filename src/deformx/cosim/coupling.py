@@ -64,6 +64,12 @@ class BodyColliders:
     planes: list[int] = field(default_factory=list)  # indices of the world's planes
 
 
+def continuous_by_default(substeps: int) -> bool:
+    """Whether ``CoSimulation(continuous_drivers=None)`` carries its drivers on continuously:
+    with several rod substeps per macro step (see :class:`CoSimulation`)."""
+    return substeps > 1
+
+
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """a x b over the last axis (numpy's cross costs ~30 us a call on small arrays)."""
     a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
@@ -135,7 +141,7 @@ class CoSimulation:
             world.dt = T / n
         self.substeps = n
         self.smooth_feedback = bool(smooth_feedback)
-        self.continuous_drivers = (n > 1 if continuous_drivers is None
+        self.continuous_drivers = (continuous_by_default(n) if continuous_drivers is None
                                    else bool(continuous_drivers))
         # the drivers' wrench of the last macro step, per body of _coupled (smooth_feedback)
         self.held_wrenches: np.ndarray | None = None
