@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Mapping, Sequence
 
 import numpy as np
@@ -32,7 +33,7 @@ class Packed:
         for k, ((_, kind, _, _, _), shape) in enumerate(zip(spec, shapes)):
             layout[k, 0] = size[kind]
             layout[k, 1:1 + len(shape)] = shape
-            size[kind] += int(np.prod(shape))
+            size[kind] += math.prod(shape)
         self.F = np.zeros(size["f"])
         self.I = np.zeros(size["i"], dtype=np.int64)
         self.I[0] = len(spec)
@@ -52,7 +53,7 @@ class Packed:
             shape = tuple(int(d) for d in layout[k, 1:1 + len(spec[k][2])])
             buf = self.F if kind == "f" else self.I
             o = int(layout[k, 0])
-            arr = buf[o:o + int(np.prod(shape))].reshape(shape)
+            arr = buf[o:o + math.prod(shape)].reshape(shape)
             self.arrays[name] = arr
             if rows is None:
                 self.fields[name] = arr

@@ -355,11 +355,13 @@ class World:
             self._check_damping([rod])
             write_damping(self._rods_p, rod, rod._index, self._dt)
             self._rods_p["group"][rod._index] = rod.contact_group
+            self._forget_factors(rod._index)
 
     def _rod_material_changed(self, rod: Rod) -> None:
         """A rod's masses, inertia or stiffness changed: rewrite its slices in place."""
         if self._rods_p is not None and not self._stale_rods:
             write_material(self._rods_p, rod, rod._index)
+            self._forget_factors(rod._index)
 
     def _check_damping(self, rods: Sequence[Rod] | None = None) -> None:
         if self.integrator == "verlet":
@@ -392,6 +394,15 @@ class World:
         self._opts = assemble.run_options(self._groups, self.iterations)
         self._bind_kernel()
         self._stale_env = False
+        self._forget_factors()
+
+    def _forget_factors(self, index: int | None = None) -> None:
+        """The stable integrator starts calm steps from the Newton factor an earlier step left
+        (see kernels/implicit.py): after a change from outside the step (parameters, state,
+        clamps), that rod's (``index``; all by default) must be made afresh."""
+        if self._rods_p is not None:
+            fact = self._rods_p["fact_h"]
+            fact[slice(None) if index is None else index] = 0.0
 
     def _bind_kernel(self) -> None:
         """The kernel for this world and the tuple of buffers it is called with."""
@@ -400,11 +411,12 @@ class World:
                       None if cp is None else cp.I)
         self._kernel = step.KERNELS[self.integrator, self.rods_coupled]
         self._call = self._first_call
+        self._dispatched = 0
         self._args = (self._sim, self._opts[0], *self._bufs) if len(self._groups) == 1 else None
 
     # A copy or pickle (RL branching, multiprocessing) holds the buffers and handles; the
     # compiled entry point is looked up again, and the rods' arrays become views again.
-    _UNPICKLED = ("_call", "_args", "_kernel", "_bufs")
+    _UNPICKLED = ("_call", "_args", "_kernel", "_bufs", "_dispatched")
 
     def __getstate__(self) -> dict:
         return {k: v for k, v in self.__dict__.items() if k not in self._UNPICKLED}
@@ -496,10 +508,14 @@ class World:
         return failed
 
     def _first_call(self, n_steps: int, *args: Any) -> tuple:
-        """The kernel through numba's dispatcher (compiling or loading it), then its compiled
-        entry point for these argument types from the next call on (~1 us less per step())."""
+        """The kernel through numba's dispatcher (compiling or loading it); from the third
+        call on its compiled entry point for these argument types (~1 us less per step(), in
+        a control loop), which costs ~0.2 ms to look up: a world stepped once by run() skips
+        that."""
         out = self._kernel(n_steps, *args)
-        self._call = compiled_entry(self._kernel, (n_steps, *args))
+        self._dispatched += 1
+        if self._dispatched >= 3:
+            self._call = compiled_entry(self._kernel, (n_steps, *args))
         return out
 
     def _warn_deep(self) -> None:
@@ -608,6 +624,7 @@ class World:
         self._pairs = np.array(state.pairs, dtype=np.int64, order="C", ndmin=2)
         self.time = float(state.time)
         self._rods_p["status"][:, 0] = 0  # a diverged world is usable again once restored
+        self._forget_factors()
 
     def _rod_state(self, rod: Rod) -> dict:
         self._ready()
@@ -632,6 +649,7 @@ class World:
                 c._row[:] = state["drivers"][c.node]
         self._rods_p["status"][rod._index, 0] = 0  # usable again after a divergence
         self._rods_p["pair_state"][1] = 0  # positions jumped: rebuild the rod-rod pair list
+        self._forget_factors(rod._index)
 
     # ------------------------------------------------------------------ diagnostics
     def energy(self) -> dict[str, float]:

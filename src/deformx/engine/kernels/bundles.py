@@ -50,8 +50,8 @@ ROD_ARRAYS = (
     ('n1', 'f', (4, 'N'), ('pen_off', 'mass', 'node_radius', 'node_kmin'), 1),
     ('e1', 'f', (5, 'E'), ('pair_off', 'rest_len', 'seg_radius', 'dil', 'scr_edot'), 1),
     ('v1', 'f', (1, 'V'), ('rest_vor',), 0),
-    ('r1', 'f', (8, 'R'), ('h_prev', 'rate', 'contacts', 'decay', 'nu', 'tau', 'times',
-                           'coupled'), 3),
+    ('r1', 'f', (11, 'R'), ('h_prev', 'rate', 'contacts', 'decay', 'nu', 'tau', 'times',
+                            'coupled', 'fact_h', 'fact_age', 'first_upd'), 3),
     # The stable integrator's contact planes per query slot (see contact/speculative.py).
     ('sp_i', 'i', ('Q', 2, 5), None, 1),
     ('ei', 'i', (7, 'E'), ('seg_a', 'seg_b', 'seg_rod', 'seg_k', 'seg_ne', 'seg_closed',
@@ -84,6 +84,9 @@ N_PEN_OFF, N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2, 3
 E_PAIR_OFF, E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3, 4
 V_REST_VOR = 0
 R_H_PREV, R_RATE, R_CONTACTS, R_DECAY, R_NU, R_TAU, R_TIMES, R_COUPLED = 0, 1, 2, 3, 4, 5, 6, 7
+# The stable integrator's Newton factor in the rod's rows of sys_A: the step it was made for
+# (0: none, or changed since), its age in steps, the first update of the last step.
+R_FACT_H, R_FACT_AGE, R_FIRST_UPD = 8, 9, 10
 E_SEG_A, E_SEG_B, E_SEG_ROD, E_SEG_K, E_SEG_NE, E_SEG_CLOSED, E_EXCLUDED = 0, 1, 2, 3, 4, 5, 6
 R_NODE0, R_ELEM0, R_VOR0, R_NE, R_CLOSED, R_GROUP = 0, 1, 2, 3, 4, 5
 ENV = (

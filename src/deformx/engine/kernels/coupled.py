@@ -20,8 +20,8 @@ from numba import njit
 from ..contact.pairplanes import PP_COLS, PS_COLS, PS_NEAR, pair_plane
 from ..contact.rodrod import build_pairs, max_displacement, pair_forces
 from .bundles import (
-    E_SEG_ROD, N_EXTRA, N_POS, N_REF, N_VEL, N_XP, R_NE, R_TIMES, SIM_DT, SIM_G, SIM_RR,
-    SIM_SKIN,
+    E_SEG_ROD, N_EXTRA, N_POS, N_REF, N_VEL, N_XP, R_FACT_H, R_NE, R_TIMES, SIM_DT, SIM_G,
+    SIM_RR, SIM_SKIN,
 )
 from .implicit import advance_island_implicit
 from .refcount import NO_REFCOUNT
@@ -155,6 +155,8 @@ def advance_world_implicit(n_steps, t, sim, opts, rd, env, cols, pairs):
             # the island solver (Literal[int](1)) beside advance_rods_implicit's int64 one
             t_isl = advance_island_implicit(isl, np.int64(1), t, sim, opts, rd, env, cols,
                                             (pairs, plist, pp, ps))
+            if isl.shape[0] > 1:  # it solved in the first rows: their rods' factors are gone
+                rd.r1[R_FACT_H][:] = 0.0
             for r in isl:
                 rd.r1[R_TIMES][r] = t_isl
                 if rd.status[r, 0] != OK:

@@ -45,8 +45,8 @@ from .bundles import (
     E_DIL, E_J, E_OMEGA, E_PAIR_OFF, E_Q, E_QE, E_QH, E_QN, E_REST_LEN, E_S, E_STRESS, E_TEXT,
     E_TN_EL, E_ALPHA, E_TORQUE, E_WE, E_WH, E_WN, N_ACC, N_CONTACT_FORCE,
     N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VE, N_VEL, N_VH, N_VN, N_XE, N_XH, N_XN, N_XP,
-    OPT_ITER, R_CLOSED, R_CONTACTS, R_COUPLED, R_ELEM0, R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE,
-    R_TAU, R_TIMES, R_VOR0,
+    OPT_ITER, R_CLOSED, R_CONTACTS, R_COUPLED, R_ELEM0, R_FACT_AGE, R_FACT_H, R_FIRST_UPD,
+    R_H_PREV, R_NE, R_NODE0, R_NU, R_RATE, R_TAU, R_TIMES, R_VOR0,
     SIM_DT, SIM_G, SIM_MAX_STRAIN, SIM_ORDER, SIM_RR, SIM_TOL, V_B, V_KAPPA, V_REST_VOR,
 )
 from .drivers import (
@@ -69,6 +69,13 @@ NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-step
 # last relative update, step halvings, the deepest start penetration, BDF2 steps retried by
 # backward Euler.
 CHORD_RATE = 0.1  # reuse the factor while each update is below this fraction of the last
+REUSE_STEPS = 20.0  # a calm step may start from the factor of up to this many steps before
+# An update made with an earlier step's factor is accepted within this fraction of the
+# tolerance (it contracts less than a fresh one: at the full tolerance a rope sticking to a box
+# accelerating under it crept 2.2 mm in 0.5 s at dt = 1e-3, and at 0.3 a steel bar at rest
+# kept 0.3 mm/s of jitter), and such a factor is tried only after a step whose first update
+# was as small (motion the predictor foresees: a fall, a rope at rest).
+STALE_LIMIT = 0.03
 EARLY_LIMIT = 10.0  # one-iteration steps only when the update is within this many tolerances
 MAX_SET_ROUNDS = 4  # contact releases per step before the set is frozen
 MAX_PAIR_ROUNDS = 6  # and for rod-rod pairs (a pile lets go of more, one layer at a time)
@@ -450,6 +457,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     pos, vel, Q, omega = rd.n3[N_POS], rd.n3[N_VEL], rd.e33[E_Q], rd.e3[E_OMEGA]
     xn, vn, Qn, wn, fn_el, tn_el = rd.n3[N_XN], rd.n3[N_VN], rd.e33[E_QN], rd.e3[E_WN], rd.n3[N_FN_EL], rd.e3[E_TN_EL]
     h_prev, rate, pair_off = rd.r1[R_H_PREV], rd.r1[R_RATE], rd.e1[E_PAIR_OFF]
+    fact_h, fact_age, first_upd = rd.r1[R_FACT_H], rd.r1[R_FACT_AGE], rd.r1[R_FIRST_UPD]
     mass, J, rest_len, rest_vor = rd.n1[N_MASS], rd.e3[E_J], rd.e1[E_REST_LEN], rd.v1[V_REST_VOR]
     fext, text, xp = rd.n3[N_FEXT], rd.e3[E_TEXT], rd.n3[N_XP]
     force, torque, dil, kappa = rd.n3[N_FORCE], rd.e3[E_TORQUE], rd.e1[E_DIL], rd.v3[V_KAPPA]
@@ -612,7 +620,24 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             _implied_rates(n0, nn, e0, ne, 1.0 / hb[k], pos, xb, Q, Qb, vel, omega)
         backtracks = 0
         active = 0
+        # A calm step (same sub-step, contacts neither switching on nor off) of a rod alone
+        # starts from the factor an earlier step left in its rows, as CVODE reuses its Newton
+        # matrix over steps: its matrix changes little from step to step, and assembling and
+        # factoring it was ~a quarter of such a step. The world forgets the factor
+        # (r1[R_FACT_H] = 0) wherever the rod's parameters, state or clamps are changed, and
+        # the coupled kernel after each island of several rods (which solves in the first rows).
+        # (fact_h < 0: factored by block LU; the contacts it was made with are taken to be
+        # those the last step ended with, and a first iterate with others refactors)
+        reuse = m == 0 and K == 1
+        for k in range(K):
+            r = isl[k]
+            reuse = (reuse and calm[k] != 0.0 and abs(fact_h[r]) == hb[k]
+                     and fact_age[r] < REUSE_STEPS and first_upd[r] <= STALE_LIMIT * tol)
         factored_active = -1
+        if reuse:
+            factored_active = int(rd.r1[R_CONTACTS][isl[0]])
+            lu[0] = 1.0 if fact_h[isl[0]] < 0.0 else 0.0
+        stale = False  # the first iterate was solved with an earlier step's factor
         while it < budget:
             it += 1
             for k in range(K):
@@ -712,7 +737,9 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             # retry with Gauss-Newton.
             bad = 0
             # A contact switching on or off changes the matrix: a chord step would overshoot.
-            refactor = it == 1 or update > CHORD_RATE * previous or active != factored_active
+            refactor = ((it == 1 and not reuse) or (it == 2 and stale)
+                        or update > CHORD_RATE * previous or active != factored_active)
+            stale = it == 1 and not refactor
             factored_active = active if refactor else factored_active
             previous = update
             for k in range(K):
@@ -764,6 +791,8 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     bad = block_lu(Ak, nb) if lu[k] != 0.0 else block_cholesky(Ak, nb)
                     if bad == 0:
                         break
+                fact_h[r] = 0.0 if bad != 0 else (-hb[k] if lu[k] != 0.0 else hb[k])
+                fact_age[r] = 0.0
                 if bad != 0:
                     fail_rod = r
                     break
@@ -796,6 +825,8 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     worst_phi = max(worst_phi, abs(rhs[bo + q, 0]) + abs(rhs[bo + q, 1])
                                     + abs(rhs[bo + q, 2]))
                 upd[k] = max(worst / scale[k], worst_phi)
+                if it == 1:
+                    first_upd[isl[k]] = upd[k]
                 update = max(update, upd[k])
             # Damped Newton: when the update stops shrinking the iterate is overshooting
             # (a locally non-convex problem, e.g. a compressed soft rod), so take a shorter step.
@@ -840,7 +871,8 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     rate[r] = max(0.3 * rate[r], upd[k] / prev_upd[k])
                 # (not after a BDF2 step's Gauss-Newton first iteration: what is left after
                 # it is not the contraction rate times the update)
-                early = (early and upd[k] <= EARLY_LIMIT * tol and rate[r] * upd[k] <= tol
+                early = (early and upd[k] <= (STALE_LIMIT if stale else EARLY_LIMIT) * tol
+                         and rate[r] * upd[k] <= tol
                          and (calm[k] != 0.0 or not touching) and hb[k] == hs)
             # (the rate against the update Newton proposed last, not the damped part applied:
             # after a damped iteration the next update is the other half of the same one)
@@ -861,7 +893,8 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     round_start = it
                     previous = 0.0  # forces a fresh factorisation
                     continue
-            done_iterating = early or update <= tol or it == budget
+            small = update <= (STALE_LIMIT * tol if stale else tol)
+            done_iterating = early or small or it == budget
             # (rounds near convergence are counted apart: they must not use up the ones at
             # convergence, the last chance to re-engage a plane released too early)
             near_round = (not done_iterating and update <= RELEASE_NEAR * tol
@@ -889,7 +922,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     continue
                 if not done_iterating:
                     continue
-                converged = early or update <= tol
+                converged = early or small
                 if converged and n_cols > 0 and refinds < MAX_REFIND:
                     # Segments that cut into a collider between their planes get one there.
                     added = 0
@@ -917,6 +950,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 _copy_state(n0, nn, e0, ne, (xn, vn, wn, Qn), (pos, vel, omega, Q))
                 second = second or hb[k] != hs
                 last_hs[k] = 0.0  # (the retry is a backward-Euler step)
+                fact_h[isl[k]] = 0.0
             if second and failed == NOT_CONVERGED:
                 # A BDF2 step that did not converge is first retried whole by backward Euler,
                 # which damps what BDF2 keeps (a rope whipped by random commands: 7x fewer
@@ -952,6 +986,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 for e in range(e0, e0 + ne):
                     pair_off[e] = -1.0
             last_hs[k] = hs
+            fact_age[r] += 1.0
             if order2:  # what the next step checks it finds (nothing changed in between)
                 _copy_state(n0, nn, e0, ne, (pos, vel, omega, Q), (xe, ve, we, Qe))
             stats[r, 1] += it
