@@ -67,7 +67,7 @@ from .refcount import NO_REFCOUNT
 NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-steps
 # stats per rod (bundles' ``stats``): steps, Newton iterations, sub-steps at the iteration cap,
 # last relative update, step halvings, the deepest start penetration, BDF2 steps retried by
-# backward Euler.
+# backward Euler, steps started from an earlier step's factor.
 CHORD_RATE = 0.1  # reuse the factor while each update is below this fraction of the last
 REUSE_STEPS = 20.0  # a calm step may start from the factor of up to this many steps before
 # An update made with an earlier step's factor is accepted within this fraction of the
@@ -740,6 +740,8 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             refactor = ((it == 1 and not reuse) or (it == 2 and stale)
                         or update > CHORD_RATE * previous or active != factored_active)
             stale = it == 1 and not refactor
+            if stale:
+                stats[isl[0], 7] += 1
             factored_active = active if refactor else factored_active
             previous = update
             for k in range(K):
