@@ -10,12 +10,12 @@ import trimesh
 import deformx as dx
 
 
-def _resting_rope(youngs_modulus: float = 1e6) -> tuple[dx.World, dx.Rod]:
+def _resting_rope() -> tuple[dx.World, dx.Rod]:
     world = dx.World(dt=1e-3, integrator="stable", rod_contact=False)
     world.add_plane(friction=0.5)
     rod = world.add_rod(dx.Rod.straight(
         n_elements=30, start=(0.0, 0.0, 0.006), direction=(1, 0, 0), length=0.3,
-        radius=0.005, density=1000.0, youngs_modulus=youngs_modulus, damping=1.0))
+        radius=0.005, density=1000.0, youngs_modulus=1e6, damping=1.0))
     return world, rod
 
 

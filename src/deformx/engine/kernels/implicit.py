@@ -628,15 +628,13 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
         # the coupled kernel after each island of several rods (which solves in the first rows).
         # (fact_h < 0: factored by block LU; the contacts it was made with are taken to be
         # those the last step ended with, and a first iterate with others refactors)
-        reuse = m == 0 and K == 1
-        for k in range(K):
-            r = isl[k]
-            reuse = (reuse and calm[k] != 0.0 and abs(fact_h[r]) == hb[k]
-                     and fact_age[r] < REUSE_STEPS and first_upd[r] <= STALE_LIMIT * tol)
+        r = isl[0]
+        reuse = (m == 0 and K == 1 and calm[0] != 0.0 and abs(fact_h[r]) == hb[0]
+                 and fact_age[r] < REUSE_STEPS and first_upd[r] <= STALE_LIMIT * tol)
         factored_active = -1
         if reuse:
-            factored_active = int(rd.r1[R_CONTACTS][isl[0]])
-            lu[0] = 1.0 if fact_h[isl[0]] < 0.0 else 0.0
+            factored_active = int(rd.r1[R_CONTACTS][r])
+            lu[0] = 1.0 if fact_h[r] < 0.0 else 0.0
         stale = False  # the first iterate was solved with an earlier step's factor
         while it < budget:
             it += 1
