@@ -14,9 +14,13 @@ carries over between machines):
    blob), explicit steps: the contact's cost per step (the step with the mesh minus the step
    without it) against the cost of the rod's internal forces (``rod_internal_loads`` timed
    alone). Target: contact <= 2x internal forces.
+4. Contact at large steps (the stable integrator at dt = 1e-2 against 1e-3, step halvings,
+   Newton iterations, against the code before large-step contact): the table of
+   ``bench_large_steps.py``, which runs each tree in its own interpreter.
 
-    python benchmarks/bench_contact.py            # full
-    python benchmarks/bench_contact.py --quick    # fewer steps and repeats
+    python benchmarks/bench_contact.py                  # full (3 rounds of table 4)
+    python benchmarks/bench_contact.py --quick          # fewer steps and repeats, 1 round
+    python benchmarks/bench_contact.py --no-large-steps # tables 1-3 only
 """
 
 from __future__ import annotations
@@ -196,6 +200,8 @@ def time_steps(world: dx.World, steps: int, repeats: int) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps and repeats")
+    parser.add_argument("--no-large-steps", action="store_true",
+                        help="skip table 4 (contact at dt = 1e-2 vs 1e-3, ~3 min per round)")
     args = parser.parse_args()
     steps, repeats = (500, 2) if args.quick else (3000, 3)
     console = Console(width=max(Console().width, 150))
@@ -260,6 +266,11 @@ def main() -> None:
     console.print(f"[dim]{time.strftime('%Y-%m-%d %H:%M')}, python {sys.version.split()[0]}, "
                   f"{os.cpu_count()} cores; mesh scenes: the rope lies on the floor / hangs "
                   "over the blob; without the mesh the same rope floats (no gravity)[/dim]")
+
+    # 4. contact at large steps
+    if not args.no_large_steps:
+        import bench_large_steps
+        bench_large_steps.main(["--rounds", "1" if args.quick else "3"])
 
 
 if __name__ == "__main__":

@@ -149,12 +149,12 @@ _report(**out)
 """
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = tree_parser(__doc__)
     parser.set_defaults(reference="0740156")
     parser.add_argument("--scenes", nargs="+", choices=SCENES, default=list(SCENES),
                         help="scenes to run (default: all)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     tree = check_tree(args.tree)
     console = Console(width=170)
     console.print(header(tree, args.reference))
