@@ -32,6 +32,8 @@
     python benchmarks/hit_target_results.py --steps 400000 --normalize --seeds 4 --targets mid \
         --ropes cosserat --train-elements 100 --train-dt 1e-4 --train-order 1 \
         --train-continuous --out runs   # the reference's elements and clamp, 8x its step
+    ... --deploy-dt 1.25e-5 --out runs   # the same runs, their trajectories generated on the
+                                         # reference's step (TrainSettings.deploy)
 """
 
 from __future__ import annotations
@@ -106,6 +108,14 @@ def main() -> None:
                        help="jump the Cosserat training rope's clamp to the arm's frame at each "
                             "control step (the task's default with one rope step per control "
                             "step; how sub-stepped training ropes ran before 2026-12-06)")
+    parser.add_argument("--deploy-elements", type=int, default=None,
+                        help="generate and choose the Cosserat policy's trajectories on a rope "
+                             "of this many elements (TrainSettings.deploy; default: the "
+                             "training rope's)")
+    parser.add_argument("--deploy-dt", type=float, default=None,
+                        help="... of this step (s), e.g. 1.25e-5")
+    parser.add_argument("--deploy-order", type=int, default=None, choices=[1, 2],
+                        help="... of this order")
     args = parser.parse_args()
     from deformx.cosim.coupling import continuous_by_default
     from deformx.engine.rod import explicit_time_step
@@ -117,6 +127,7 @@ def main() -> None:
     for name in args.targets:
         for rope in args.ropes:
             task = dict(target=TARGETS[name], rope=rope)
+            deploy = {}
             tag = ""
             if rope == "cosserat":  # the training rope's own numbers, where not the task's
                 for key, arg, short in (("n_elements", args.train_elements, "e"),
@@ -137,6 +148,10 @@ def main() -> None:
                 if continuous is None:  # the co-simulation's own rule
                     continuous = continuous_by_default(round(trained.control_dt / trained.rope_dt))
                 tag += "_c" if continuous else ""
+                deploy = {key: arg for key, arg in (("n_elements", args.deploy_elements),
+                                                    ("rope_dt", args.deploy_dt),
+                                                    ("order", args.deploy_order))
+                          if arg is not None}
             runs = []
             for seed in range(args.seeds):  # resumable: a finished run only re-evaluates
                 out = args.out / (f"{name}_{rope}{tag}" + (f"_s{seed}" if args.seeds > 1 else ""))
@@ -145,14 +160,16 @@ def main() -> None:
                 summary = train(out, TrainSettings(total_steps=args.steps, num_envs=args.envs,
                                                    normalize=args.normalize, seed=seed,
                                                    video=False, select=select,
-                                                   rollouts=args.rollouts, task=task),
+                                                   rollouts=args.rollouts, task=task,
+                                                   deploy=deploy),
                                 progress=False)
                 rank = summary["worst_d_min"] if select == "robust" else summary["d_min"]
                 runs.append((rank, seed, out, summary, time.perf_counter() - t0))
                 print(f"{name} {rope} seed {seed}: {100 * summary['d_min']:.1f} cm", flush=True)
             _, seed, out, summary, wall = min(runs, key=lambda r: r[0])
             _, q = load_trajectory(out / "best_rollout.csv")
-            cfg = HitTargetConfig(**dict(task, randomise={}))  # replays draw their own
+            # (the rope the trajectory was chosen on; replays draw their own parameters)
+            cfg = HitTargetConfig(**dict(task, randomise={}, **deploy))
             same = replay(q, cfg, n=args.replays, perturb=REPLAY_PERTURBATION, seed=1)
             limit = explicit_time_step(cfg.rope_length / args.ref_elements, cfg.radius,
                                        cfg.density, max(cfg.youngs_modulus,
@@ -178,6 +195,7 @@ def main() -> None:
                          for n, dt in checks} if args.ref_check else {}
             row = dict(target=name, rope=rope, sim=summary["d_min"], wall=wall, seed=seed,
                        training_rope={k: v for k, v in task.items() if k != "target"},
+                       deploy=deploy,
                        seeds=[r[3]["d_min"] for r in runs], select=summary.get("select"),
                        worst=summary.get("worst_d_min"),
                        deterministic=summary["d_min_deterministic"],

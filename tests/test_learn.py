@@ -370,11 +370,14 @@ def test_replayed_actions_give_the_sampled_episodes_and_robust_choice_takes_the_
         TrainSettings(select="robust", task={"rope": "capsule"})
     with pytest.raises(ValueError, match="no action"):
         replay_actions([], cfg)
+    with pytest.raises(ValueError, match="density.*valid: continuous_drivers, n_elements"):
+        TrainSettings(deploy={"density": 500.0})
 
 
 def test_train_command_writes_a_run_directory(tmp_path):
     pytest.importorskip("stable_baselines3")
     import json
+    from dataclasses import replace
 
     from typer.testing import CliRunner
 
@@ -419,6 +422,24 @@ def test_train_command_writes_a_run_directory(tmp_path):
     nominal = HitTargetConfig(target=(0.0, 1.0, 0.6), n_elements=12, order=1, rope_dt=1e-3)
     d_min = json.loads((tmp_path / "fine" / "summary.json").read_text())["d_min"]
     assert replay(q, nominal)[0] == pytest.approx(d_min, abs=1e-6)  # (the CSV: 1e-9 rad)
+    # the same run (no more training), its trajectories generated and chosen on a finer rope
+    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
+                              "256", "--envs", "2", "--rope-dt", "0.001", "--rope-elements",
+                              "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
+                              "--no-video", "--no-progress", "--rollouts", "2",
+                              "--randomise", "0.3", "--deploy-rope-dt", "0.0005",
+                              "--deploy-rope-elements", "16"])
+    assert res.exit_code == 0, res.output
+    summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
+    assert summary["timesteps"] == 256
+    assert summary["deploy"] == {"rope_dt": 0.0005, "n_elements": 16}
+    _, q = load_trajectory(tmp_path / "fine" / "best_rollout.csv")
+    deployed = replace(nominal, n_elements=16, rope_dt=5e-4)
+    assert replay(q, deployed)[0] == pytest.approx(summary["d_min"], abs=1e-6)
+    assert abs(replay(q, nominal)[0] - summary["d_min"]) > 1e-5  # another rope
+    res = runner.invoke(app, ["train", "hit-target", "--rope", "capsule", "--deploy-rope-dt",
+                              "0.0005", "--out", str(out)])
+    assert res.exit_code != 0 and "deploy" in res.output
     res = runner.invoke(app, ["train", "hit-apple"])
     assert res.exit_code != 0 and "hit-target" in res.output
     res = runner.invoke(app, ["train", "hit-target", "--rope", "chain", "--out", str(out)])

@@ -452,6 +452,9 @@ def train(
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
     rollouts: int = typer.Option(64, "--rollouts", min=1, help="Trajectories the trained policy generates (the deterministic one and the rest with its exploration noise); the best is exported."),
     select: str = typer.Option("best", "--select", help="best: least d_min on the training rope (the paper); robust: least worst d_min over it and finer-step, perturbed and 40-element ropes (Cosserat only)."),
+    deploy_rope_dt: Optional[float] = typer.Option(None, "--deploy-rope-dt", help="Generate and choose the trajectories on a Cosserat rope of this step (s) instead of the training rope's (e.g. 1.25e-5, finer than training affords)."),
+    deploy_rope_elements: Optional[int] = typer.Option(None, "--deploy-rope-elements", min=2, help="Elements of the rope the trajectories are generated on (default: the training rope's)."),
+    deploy_rope_order: Optional[int] = typer.Option(None, "--deploy-rope-order", min=1, max=2, help="Its stable integrator's order (default: the training rope's)."),
 ) -> None:
     """Train PPO (stable-baselines3) on a task; resumable. Writes checkpoints, episodes.csv,
     TensorBoard logs (tb/), learning_curve.png, best_rollout.csv (the joint commands a UR5e
@@ -471,13 +474,17 @@ def train(
                        ("order", rope_order), ("continuous_drivers", continuous_clamp)):
         if value is not None:
             overrides[key] = value
+    deploy = {key: value for key, value in (("rope_dt", deploy_rope_dt),
+                                            ("n_elements", deploy_rope_elements),
+                                            ("order", deploy_rope_order)) if value is not None}
     try:
         settings = TrainSettings(total_steps=steps, num_envs=envs, seed=seed, video=video,
                                  normalize=normalize, rollouts=rollouts, select=select,
-                                 task=overrides)
+                                 task=overrides, deploy=deploy)
         from .learn.task import HitTargetConfig
 
         HitTargetConfig(**overrides)  # bad task numbers fail here, before any work
+        HitTargetConfig(**dict(overrides, **deploy))
     except ValueError as err:
         _fail(str(err))
     t0 = time.perf_counter()

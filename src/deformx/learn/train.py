@@ -23,6 +23,8 @@ a rename, so a kill loses at most that much; with ``normalize``, ``vecnormalize.
 it and beside ``policy.zip``), ``episodes.csv`` (one row per finished episode,
 appended), ``tb/`` (TensorBoard), and at the end ``policy.zip``, ``learning_curve.png``,
 ``best_rollout.csv`` (time, six joint targets), ``best_rollout.mp4`` and ``summary.json``.
+``TrainSettings.deploy`` generates and chooses the trajectories on a finer rope than training
+can afford (its step, elements, order); the policy is closed loop and steers that rope too.
 """
 
 from __future__ import annotations
@@ -63,6 +65,9 @@ class TrainSettings:
                                              # paper); "robust": least worst d_min over it and
                                              # ROBUST_MODELS (Cosserat rope only)
     task: dict = field(default_factory=dict)  # HitTargetConfig overrides (target, rope, ...)
+    deploy: dict = field(default_factory=dict)  # HitTargetConfig changes of the training rope
+                                                # for the rope the trajectories are generated
+                                                # and chosen on (default: the training rope)
 
     def __post_init__(self) -> None:
         for name in ("total_steps", "num_envs", "rollout", "epochs", "checkpoint_every",
@@ -72,11 +77,21 @@ class TrainSettings:
                 raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
         if self.select not in ("best", "robust"):
             raise ValueError(f"select must be 'best' or 'robust', got {self.select!r}")
+        if self.deploy:
+            if self.task.get("rope", "cosserat") != "cosserat":
+                raise ValueError("deploy changes the Cosserat rope: it needs rope='cosserat'")
+            unknown = sorted(set(self.deploy) - DEPLOYABLE)
+            if unknown:
+                raise ValueError(f"deploy: {', '.join(unknown)} cannot be changed for "
+                                 f"deployment; valid: {', '.join(sorted(DEPLOYABLE))}")
         if self.select == "robust" and self.task.get("rope", "cosserat") != "cosserat":
             raise ValueError("select='robust' replays on other Cosserat ropes: it needs "
                              "rope='cosserat'")
 
 
+# What may differ between the rope a policy is trained on and the one its trajectories are
+# generated on (the discretisation, not the task or the rope's material).
+DEPLOYABLE = {"n_elements", "rope_dt", "order", "continuous_drivers"}
 # Relative spread (uniform +-) of the rope parameters for replays on a perturbed rope: the
 # stand-in for the paper's repeats on the real rope, and one of the robust choice's models.
 REPLAY_PERTURBATION = {"youngs_modulus": 0.1, "density": 0.05, "damping": 0.2}
@@ -227,8 +242,10 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
 
     # As the paper deploys it: the trained policy generates joint-command trajectories in
     # simulation (its own exploration noise), and the best one is replayed open loop - on the
-    # nominal rope, also where training randomised it (and the robust choice's other models).
-    config = replace(config, randomise={})
+    # nominal rope, also where training randomised it (and the robust choice's other models);
+    # with ``deploy``, on a finer rope than training could afford (the policy is closed loop:
+    # it steers that rope as it steered the training one).
+    config = replace(config, randomise={}, **settings.deploy)
     samples = sample_rollouts(mean_action, config, n=settings.rollouts, std=settings.std,
                               seed=settings.seed)
     score = np.where(samples["diverged"], np.inf, samples["d_min"])
@@ -244,6 +261,7 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
     summary = {"timesteps": int(model.num_timesteps), "d_min": result["d_min"],
                "d_min_3d": result["d_min_3d"], "success": result["success"],
                "rollouts": settings.rollouts, "best_rollout": best, "select": settings.select,
+               "deploy": dict(settings.deploy),
                "worst_d_min": max(float(score[best]), result["d_min"]),
                "d_min_deterministic": float(samples["d_min"][0]),
                "d_min_sampled_median": float(np.median(samples["d_min"])),
