@@ -120,8 +120,8 @@ def main() -> None:
     from deformx.cosim.coupling import continuous_by_default
     from deformx.engine.rod import explicit_time_step
     from deformx.learn.task import RANDOMISABLE, HitTargetConfig
-    from deformx.learn.train import (REPLAY_PERTURBATION, TrainSettings, load_trajectory,
-                                     replay, train)
+    from deformx.learn.train import (REPLAY_PERTURBATION, TrainSettings, deployed,
+                                     load_trajectory, replay, train)
 
     rows = []
     for name in args.targets:
@@ -169,7 +169,7 @@ def main() -> None:
             _, seed, out, summary, wall = min(runs, key=lambda r: r[0])
             _, q = load_trajectory(out / "best_rollout.csv")
             # (the rope the trajectory was chosen on; replays draw their own parameters)
-            cfg = HitTargetConfig(**dict(task, randomise={}, **deploy))
+            cfg = deployed(HitTargetConfig(**task), deploy)
             same = replay(q, cfg, n=args.replays, perturb=REPLAY_PERTURBATION, seed=1)
             limit = explicit_time_step(cfg.rope_length / args.ref_elements, cfg.radius,
                                        cfg.density, max(cfg.youngs_modulus,

@@ -372,6 +372,15 @@ def test_replayed_actions_give_the_sampled_episodes_and_robust_choice_takes_the_
         replay_actions([], cfg)
     with pytest.raises(ValueError, match="density.*valid: continuous_drivers, n_elements"):
         TrainSettings(deploy={"density": 500.0})
+    from deformx.learn.train import deployed
+
+    jumped = replace(cfg, rope_dt=1e-3, continuous_drivers=False, randomise={"density": 0.1})
+    fine = deployed(jumped, {"rope_dt": 2.5e-4, "n_elements": 30})
+    assert (fine.rope_dt, fine.n_elements, fine.randomise) == (2.5e-4, 30, {})
+    assert fine.continuous_drivers is None  # the task's rule for a sub-stepped rope
+    assert deployed(jumped, {"rope_dt": 2.5e-4, "continuous_drivers": False}).continuous_drivers \
+        is False
+    assert deployed(jumped, {"n_elements": 30}).continuous_drivers is False
 
 
 def test_train_command_writes_a_run_directory(tmp_path):

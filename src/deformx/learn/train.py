@@ -104,6 +104,16 @@ ROBUST_MODELS = ({"randomise": REPLAY_PERTURBATION},
                  {"n_elements": 40, "rope_dt": 2.5e-4})
 
 
+def deployed(config: HitTargetConfig, deploy: dict) -> HitTargetConfig:
+    """The rope ``TrainSettings.deploy`` describes: ``config`` with those changes, nominal
+    (not randomised); a new step without its own clamp setting takes the task's default rule
+    (the clamp carried on continuously where the step sub-steps the control step)."""
+    changes = dict(deploy)
+    if "rope_dt" in changes:
+        changes.setdefault("continuous_drivers", None)
+    return replace(config, randomise={}, **changes)
+
+
 def _ppo():
     try:
         from stable_baselines3 import PPO
@@ -245,7 +255,7 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
     # nominal rope, also where training randomised it (and the robust choice's other models);
     # with ``deploy``, on a finer rope than training could afford (the policy is closed loop:
     # it steers that rope as it steered the training one).
-    config = replace(config, randomise={}, **settings.deploy)
+    config = deployed(config, settings.deploy)
     samples = sample_rollouts(mean_action, config, n=settings.rollouts, std=settings.std,
                               seed=settings.seed)
     score = np.where(samples["diverged"], np.inf, samples["d_min"])
