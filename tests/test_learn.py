@@ -446,6 +446,17 @@ def test_train_command_writes_a_run_directory(tmp_path):
     deployed = replace(nominal, n_elements=16, rope_dt=5e-4)
     assert replay(q, deployed)[0] == pytest.approx(summary["d_min"], abs=1e-6)
     assert abs(replay(q, nominal)[0] - summary["d_min"]) > 1e-5  # another rope
+    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
+                              "256", "--envs", "2", "--rope-dt", "0.001", "--rope-elements",
+                              "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
+                              "--no-video", "--no-progress", "--rollouts", "3",
+                              "--randomise", "0.3", "--deploy-rope-dt", "0.0005",
+                              "--deploy-rope-elements", "16", "--select", "robust"])
+    assert res.exit_code == 0, res.output  # robust: the deployment rope and perturbed draws
+    summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
+    assert summary["select"] == "robust" and summary["worst_d_min"] >= summary["d_min"] - 1e-9
+    _, q = load_trajectory(tmp_path / "fine" / "best_rollout.csv")
+    assert replay(q, deployed)[0] == pytest.approx(summary["d_min"], abs=1e-6)
     res = runner.invoke(app, ["train", "hit-target", "--rope", "capsule", "--deploy-rope-dt",
                               "0.0005", "--out", str(out)])
     assert res.exit_code != 0 and "deploy" in res.output
