@@ -482,9 +482,10 @@ def train(
                                  normalize=normalize, rollouts=rollouts, select=select,
                                  task=overrides, deploy=deploy)
         from .learn.task import HitTargetConfig
+        from .learn.train import deployed
 
-        HitTargetConfig(**overrides)  # bad task numbers fail here, before any work
-        HitTargetConfig(**dict(overrides, **deploy))
+        # bad task or deployment numbers fail here, before any work
+        deployed(HitTargetConfig(**overrides), deploy)
     except ValueError as err:
         _fail(str(err))
     t0 = time.perf_counter()
