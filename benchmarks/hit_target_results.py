@@ -63,6 +63,9 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=1,
                         help="PPO runs per cell (seeds 0..n-1); the best one's trajectory is "
                              "replayed")
+    parser.add_argument("--seed-ids", type=int, nargs="+", default=None,
+                        help="these PPO seeds instead of 0..--seeds-1 (run directories "
+                             "always suffixed _s<seed>)")
     parser.add_argument("--targets", nargs="+", default=list(TARGETS), choices=list(TARGETS))
     parser.add_argument("--ropes", nargs="+", default=["cosserat", "capsule"])
     parser.add_argument("--out", type=Path, default=Path("runs"))
@@ -72,6 +75,9 @@ def main() -> None:
     parser.add_argument("--select", default="best", choices=["best", "robust"],
                         help="which sampled trajectory is exported (TrainSettings.select; "
                              "robust: Cosserat rows only)")
+    parser.add_argument("--robust-draws", type=int, default=2,
+                        help="perturbed draws of the deployment rope a robust choice replays "
+                             "on (TrainSettings.robust_draws; with --deploy-*)")
     parser.add_argument("--ref-elements", type=int, default=100,
                         help="elements of the reference rope")
     parser.add_argument("--ref-integrator", default="stable", choices=["stable", "verlet"])
@@ -153,15 +159,18 @@ def main() -> None:
                                                     ("order", args.deploy_order))
                           if arg is not None}
             runs = []
-            for seed in range(args.seeds):  # resumable: a finished run only re-evaluates
-                out = args.out / (f"{name}_{rope}{tag}" + (f"_s{seed}" if args.seeds > 1 else ""))
+            seeds = args.seed_ids if args.seed_ids else range(args.seeds)
+            suffix = args.seed_ids is not None or args.seeds > 1
+            for seed in seeds:  # resumable: a finished run only re-evaluates
+                out = args.out / (f"{name}_{rope}{tag}" + (f"_s{seed}" if suffix else ""))
                 t0 = time.perf_counter()
                 select = args.select if rope == "cosserat" else "best"
                 summary = train(out, TrainSettings(total_steps=args.steps, num_envs=args.envs,
                                                    normalize=args.normalize, seed=seed,
                                                    video=False, select=select,
                                                    rollouts=args.rollouts, task=task,
-                                                   deploy=deploy),
+                                                   deploy=deploy,
+                                                   robust_draws=args.robust_draws),
                                 progress=False)
                 rank = summary["worst_d_min"] if select == "robust" else summary["d_min"]
                 runs.append((rank, seed, out, summary, time.perf_counter() - t0))

@@ -451,10 +451,19 @@ def test_train_command_writes_a_run_directory(tmp_path):
                               "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
                               "--no-video", "--no-progress", "--rollouts", "3",
                               "--randomise", "0.3", "--deploy-rope-dt", "0.0005",
-                              "--deploy-rope-elements", "16", "--select", "robust"])
+                              "--deploy-rope-elements", "16", "--select", "robust",
+                              "--robust-draws", "3"])
     assert res.exit_code == 0, res.output  # robust: the deployment rope and perturbed draws
     summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
     assert summary["select"] == "robust" and summary["worst_d_min"] >= summary["d_min"] - 1e-9
+    # each rollout's d_min on the deployment rope and on each draw; the choice: least worst
+    scores = np.genfromtxt(tmp_path / "fine" / "rollout_scores.csv", delimiter=",", names=True)
+    assert scores.dtype.names == ("d_min", "perturbed_seed11", "perturbed_seed12",
+                                  "perturbed_seed13") and len(scores) == 3
+    table = np.column_stack([scores[n] for n in scores.dtype.names])
+    assert summary["best_rollout"] == int(np.argmin(table.max(axis=1)))
+    assert summary["d_min"] == pytest.approx(table[summary["best_rollout"], 0], abs=1e-6)
+    assert len(set(np.round(table[summary["best_rollout"]], 9))) > 1  # the draws differ
     _, q = load_trajectory(tmp_path / "fine" / "best_rollout.csv")
     assert replay(q, deployed)[0] == pytest.approx(summary["d_min"], abs=1e-6)
     res = runner.invoke(app, ["train", "hit-target", "--rope", "capsule", "--deploy-rope-dt",

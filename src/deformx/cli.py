@@ -451,7 +451,8 @@ def train(
     normalize: bool = typer.Option(False, "--normalize", help="Normalise observations and rewards (SB3's VecNormalize)."),
     progress: bool = typer.Option(True, "--progress/--no-progress", help="Show a progress bar."),
     rollouts: int = typer.Option(64, "--rollouts", min=1, help="Trajectories the trained policy generates (the deterministic one and the rest with its exploration noise); the best is exported."),
-    select: str = typer.Option("best", "--select", help="best: least d_min on the training rope (the paper); robust: least worst d_min over it and finer-step, perturbed and 40-element ropes (Cosserat only; with --deploy-*: over the deployment rope and two perturbed draws of it)."),
+    select: str = typer.Option("best", "--select", help="best: least d_min on the training rope (the paper); robust: least worst d_min over it and finer-step, perturbed and 40-element ropes (Cosserat only; with --deploy-*: over the deployment rope and --robust-draws perturbed draws of it)."),
+    robust_draws: int = typer.Option(2, "--robust-draws", min=1, help="Perturbed draws of the deployment rope a robust choice replays every trajectory on (with --deploy-*; more: a choice less lucky on its draws, each draw one more replay of all the rollouts)."),
     deploy_rope_dt: Optional[float] = typer.Option(None, "--deploy-rope-dt", help="Generate and choose the trajectories on a Cosserat rope of this step (s) instead of the training rope's (e.g. 1.25e-5, finer than training affords)."),
     deploy_rope_elements: Optional[int] = typer.Option(None, "--deploy-rope-elements", min=2, help="Elements of the rope the trajectories are generated on (default: the training rope's)."),
     deploy_rope_order: Optional[int] = typer.Option(None, "--deploy-rope-order", min=1, max=2, help="Its stable integrator's order (default: the training rope's)."),
@@ -480,6 +481,7 @@ def train(
     try:
         settings = TrainSettings(total_steps=steps, num_envs=envs, seed=seed, video=video,
                                  normalize=normalize, rollouts=rollouts, select=select,
+                                 robust_draws=robust_draws,
                                  task=overrides, deploy=deploy)
         from .learn.task import HitTargetConfig
         from .learn.train import deployed
@@ -496,7 +498,7 @@ def train(
                   f"{100 * summary['d_min_3d']:.1f} cm; deterministic "
                   f"{100 * summary['d_min_deterministic']:.1f} cm)")
     console.print(f"outputs in {escape(str(out))}: policy.zip, checkpoints/, episodes.csv, tb/, "
-                  "learning_curve.png, best_rollout.csv/.mp4, summary.json")
+                  "learning_curve.png, best_rollout.csv/.mp4, rollout_scores.csv, summary.json")
 
 
 if __name__ == "__main__":  # pragma: no cover
