@@ -251,3 +251,51 @@ def test_flat_patch_shortcut_agrees_with_the_exact_search():
     scale = np.abs(forces[1]).max()
     assert scale > 0.0
     np.testing.assert_allclose(forces[0], forces[1], rtol=0.0, atol=1e-3 * scale)
+
+
+def test_fast_queries_search_directly_and_find_what_the_exact_search_finds():
+    """A query slot moving faster than its cache's skin per step (a rope dragged round a post
+    at a 10 ms step) stops refilling its cache of a curved patch and searches the mesh's BVH
+    directly (``Q_COL`` = -2 - collider) until it slows down; every answer along the way, cached
+    or direct, is the exact nearest triangle (a fresh search without any cache), and a segment
+    over a single flat face adds nothing beyond its ends, as a flat patch's shortcut says."""
+    from deformx.engine.contact.segments import Q_COL, _mesh_closest
+    from deformx.engine.geometry.bvh import bvh_closest_segment
+
+    post = trimesh.creation.cylinder(radius=0.02, height=0.3, sections=48)
+    world = dx.World(dt=1e-2, gravity=(0.0, 0.0, 0.0))
+    world.add_rod(rope(4, (0.5, 0.5, 0.5)))
+    world.add_mesh((post.vertices, post.faces))
+    world.step(1)  # (packs the tables; the rope is far from the post)
+    a = world.arrays
+    args = (0, a["rng"][0, 4], a["pose"][0], a["par"], a["MV"], a["MF"], a["Blo"], a["Bhi"],
+            a["Bleft"], a["Bright"], a["Bstart"], a["Bcount"], a["Border"], a["Fn"], a["En"],
+            a["Vn"], a["Fg"], a["qc_meta"], a["qc_geo"], a["qc_tris"], a["qc_dist"],
+            a["tr_stack"][0], a["tr_bound"][0])
+    reach = 0.0275  # a 5 mm rope's reach at 1 m/s and 10 ms
+    a["qc_meta"][:3, Q_COL] = -1  # slots 0-2 as new (the step queried them far away)
+    modes = []
+    for k in range(40):  # an element circling the post 1 cm per call, then 1 mm per call
+        step = 0.01 if k < 25 else 0.001
+        phi = (step * k if k < 25 else 0.25 + step * (k - 25)) / 0.0245
+        pa = (0.0245 * math.cos(phi), 0.0245 * math.sin(phi), 0.05)
+        pb = (0.0245 * math.cos(phi + 0.4), 0.0245 * math.sin(phi + 0.4), 0.052)
+        for slot, (p, q) in enumerate(((pa, pa), (pa, pb))):
+            hit, s, sd, n, c = _mesh_closest(*args, slot, p, q, reach, 1 if step < 0.005 else 0)
+            tri, s_ref, *_, d2 = bvh_closest_segment(
+                a["Blo"], a["Bhi"], a["Bleft"], a["Bright"], a["Bstart"], a["Bcount"],
+                a["Border"], a["MV"], a["MF"], p, q, reach, a["rng"][0, 4])
+            assert hit and tri >= 0
+            assert sd == pytest.approx(math.sqrt(d2), abs=1e-12)
+            x = np.add(np.multiply(1.0 - s, p), np.multiply(s, q))
+            assert np.linalg.norm(x - np.asarray(c)) == pytest.approx(sd, abs=1e-12)
+        modes.append(a["qc_meta"][1, Q_COL])
+    assert modes[0] == 0 and -2 in modes[1:25] and modes[-1] == 0  # cached, direct, cached
+    # over the post's flat top face from end to end: nothing beyond the ends, directly too
+    top = int(np.argmax(post.face_normals[:, 2]))
+    corners = post.vertices[post.faces[top]]
+    mid = corners.mean(axis=0)
+    ends = [tuple(mid + 0.3 * (corners[i] - mid) + (0.0, 0.0, 0.002 + 0.001 * i)) for i in (0, 1)]
+    a["qc_meta"][2, Q_COL] = -2
+    assert not _mesh_closest(*args, 2, *ends, reach, 0)[0]
+    assert a["qc_meta"][2, Q_COL] == -2

@@ -165,7 +165,8 @@ def _moved(qc_geo, slot, la, lb) -> float:
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts, faces, Fg, la,
-                  lb, reach, skin, two_sided, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound):
+                  lb, reach, skin, two_sided, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound,
+                  lasting):
     """Nearest triangle to local segment la-lb within ``reach`` (m), through a per-slot cache;
     ``stack``, ``bound``: BVH traversal scratch (the rod's rows of ``tr_stack``, ``tr_bound``).
 
@@ -185,18 +186,41 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     above such a patch with both ends' projections in it, or farther than ``reach``, has no
     contact beyond what its ends carry (its distance is at least the linear interpolation of
     theirs), and gets -1: callers ask segments only for that excess.
+
+    A cache is worth filling only where it outlasts the step: ``lasting`` (1: the caller
+    expects the slot to move less than the skin per step; 0: more; -1: keep the slot's mode)
+    sends a slot whose cache of a curved or edged patch (not flat) ran out, and that moves
+    faster than its skin, to a direct nearest-triangle search (pruned by the best distance so
+    far: a handful of exact tests, where a refill computes every triangle within the reach and
+    skin: 40-50 round a 48-sided post) until it slows down (``Q_COL`` is then ``-2 - c``).
     """
     point = la[0] == lb[0] and la[1] == lb[1] and la[2] == lb[2]
     moved = 0.0
     delta2 = 0.0
     fresh = False
     within = reach + skin
+    direct = qc_meta[slot, Q_COL] == -2 - c and lasting <= 0
     if qc_meta[slot, Q_COL] == c:
         moved = _moved(qc_geo, slot, la, lb)
         delta2 = max(dist2(la, (qc_geo[slot, 0], qc_geo[slot, 1], qc_geo[slot, 2])),
                      dist2(lb, (qc_geo[slot, 3], qc_geo[slot, 4], qc_geo[slot, 5])))
     # Valid while the ends moved less than the reach the cache was filled for exceeds this one.
     refill = qc_meta[slot, Q_COL] != c or moved * math.sqrt(3.0) > qc_geo[slot, Q_WITHIN] - reach
+    if refill and lasting == 0 and qc_meta[slot, Q_COL] == c and qc_meta[slot, Q_FLAT] < 0:
+        direct = True
+    if direct:
+        if lasting == 0:
+            qc_meta[slot, Q_COL] = -2 - c
+        tri, s, u, v, w, d2 = closest_segment_search(lo, hi, left, right, start, count, order,
+                                                     verts, faces, la, lb, reach, root, stack,
+                                                     bound)
+        if tri >= 0 and not point and _outer_side(_height(Fg, tri, la), _height(Fg, tri, lb),
+                                                 two_sided) and _inside(Fg, tri, la) \
+                and _inside(Fg, tri, lb):
+            # Above one face end to end: no contact beyond what its ends carry (as a flat
+            # patch's shortcut says, should the slot have moved onto one).
+            return -1, 0.0, 0.0, 0.0, 0.0, np.inf, False
+        return tri, s, u, v, w, d2, True
     while True:
         if refill:
             n, far = nearest_k_search(lo, hi, left, right, start, count, order, verts, faces,
@@ -268,7 +292,7 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount, Border, Fn,
                   En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound, slot, pa, pb,
-                  reach):
+                  reach, lasting=1):
     """Deepest point of world segment pa-pb against mesh collider ``c`` (BVH root ``root`` in
     the packed tables) within ``reach`` (m).
 
@@ -278,6 +302,7 @@ def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, B
     query (node i or element N + e) in the query cache; ``stack``, ``bound``: BVH traversal
     scratch. Compiled without reference counting (see :mod:`deformx.engine.kernels.refcount`);
     the packed tables use global indices (see ``pack``) so that no per-query views are needed.
+    ``lasting``: whether the slot's query cache can outlast a step (see ``_mesh_nearest``).
     """
     la = _to_local(pose, c, pa[0], pa[1], pa[2])
     lb = _to_local(pose, c, pb[0], pb[1], pb[2])
@@ -285,7 +310,7 @@ def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, B
                                                Bcount, Border, MV, MF, Fg, la, lb, reach,
                                                0.5 * reach, par[c, P_TWO_SIDED] != 0.0,
                                                qc_meta, qc_geo, qc_tris, qc_dist, stack,
-                                               bound)
+                                               bound, lasting)
     if tri < 0 and fresh and par[c, P_TWO_SIDED] == 0.0 and par[c, P_REPULSION] > 0.0:
         # Nothing near the surface: the segment may still be inside a closed mesh, less
         # than the repulsion distance deep (checked when the cache is refilled, or on

@@ -244,7 +244,7 @@ def _slot(k, n0, nn, e0, n_nodes, node_radius):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def _closest(cols, r, c, pose, slot, pa, pb, reach):
+def _closest(cols, r, c, pose, slot, pa, pb, reach, lasting):
     """Deepest point of world segment pa-pb against collider ``c`` within ``reach`` (m), for
     query ``slot`` of rod ``r``: see ``_mesh_closest`` and ``_shape_closest``."""
     if cols.kind[c] == MESH:
@@ -252,7 +252,7 @@ def _closest(cols, r, c, pose, slot, pa, pb, reach):
             c, cols.rng[c, 4], pose, cols.par, cols.MV, cols.MF, cols.Blo, cols.Bhi, cols.Bleft,
             cols.Bright, cols.Bstart, cols.Bcount, cols.Border, cols.Fn, cols.En, cols.Vn,
             cols.Fg, cols.qc_meta, cols.qc_geo, cols.qc_tris, cols.qc_dist, cols.tr_stack[r],
-            cols.tr_bound[r], slot, pa, pb, reach)
+            cols.tr_bound[r], slot, pa, pb, reach, lasting)
     return _shape_closest(c, cols.kind[c], pose, cols.par, pa, pb, reach)
 
 
@@ -311,7 +311,10 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                       + math.sqrt(twist[c, 3] ** 2 + twist[c, 4] ** 2 + twist[c, 5] ** 2)
                       * math.sqrt(rx * rx + ry * ry + rz * rz))
                 reach = radius + MARGIN * (travel + vc * h) + 0.5 * radius
-                hit, s, sd, n, q = _closest(cols, r, c, pose, slot, pa, pb, reach)
+                # a mesh query's cache outlasts the step if the next step's reach exceeds
+                # this one's less the skin (half of it) by more than the move (sqrt 3 per axis)
+                lasting = 1 if math.sqrt(3.0) * (travel + vc * h) <= 0.5 * reach else 0
+                hit, s, sd, n, q = _closest(cols, r, c, pose, slot, pa, pb, reach, lasting)
                 if not hit:
                     continue
                 if not node and cols.kind[c] != MESH and abs(s - 0.5) > 0.2:
@@ -404,7 +407,7 @@ def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> i
                 if tangent_bound(cols.kind[c], shape, la[0], la[1], la[2], lb[0], lb[1],
                                  lb[2]) > reach:
                     continue  # (a rope lying along a shape: no search)
-            hit, s, sd, n, q = _closest(cols, r, c, pose, slot, pa, pb, reach)
+            hit, s, sd, n, q = _closest(cols, r, c, pose, slot, pa, pb, reach, -1)
             if not hit or s <= 0.0 or s >= 1.0:
                 continue
             src = n_planes + c

@@ -23,7 +23,6 @@ from numba import njit
 from deformx.engine.geometry.closest import (
     bary_point,
     closest_point_segment,
-    closest_segment_triangle,
     dist2,
     lerp,
     segment_triangle_dist2,
@@ -355,6 +354,7 @@ def closest_segment_search(lo, hi, left, right, start, count, order, vertices, f
                            max_dist, root, stack, bound):
     """``bvh_closest_segment`` with its traversal scratch passed in (``traversal_stack``): it
     allocates nothing, so a caller compiled without reference counting can use it."""
+    point = p0[0] == p1[0] and p0[1] == p1[1] and p0[2] == p1[2]
     slo = (min(p0[0], p1[0]), min(p0[1], p1[1]), min(p0[2], p1[2]))
     shi = (max(p0[0], p1[0]), max(p0[1], p1[1]), max(p0[2], p1[2]))
     mid = lerp(p0, p1, 0.5)
@@ -379,8 +379,7 @@ def closest_segment_search(lo, hi, left, right, start, count, order, vertices, f
                 va, vb, vc = _corners(vertices, faces, f)
                 if _beyond(va, vb, vc, p0, p1, slo, shi, best):
                     continue
-                s, u, v, w = closest_segment_triangle(p0, p1, va, vb, vc)
-                d2 = dist2(lerp(p0, p1, s), bary_point(va, vb, vc, u, v, w))
+                s, u, v, w, d2 = segment_triangle_dist2(p0, p1, point, va, vb, vc)
                 # <= for the first hit so that a triangle exactly at max_dist counts.
                 if d2 < best or (tri < 0 and d2 <= best):
                     best = d2
