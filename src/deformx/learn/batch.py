@@ -1,8 +1,17 @@
-"""``n`` copies of the hit-target task stepped together: one MuJoCo model holding ``n`` arms
-(env ``i``'s frame shifted by ``i * spacing`` along x, out of the swing plane, so the copies
-never meet), one DeformX world holding the ``n`` ropes (one kernel call steps them all) and one
+"""``n`` copies of the hit-target task stepped together: one MuJoCo model holding ``n`` arms,
+one DeformX world holding the ``n`` ropes (one kernel call steps them all) and one
 co-simulation coupling them. The single environment is a batch of one; the vector
 environment a batch of ``num_envs``.
+
+By default (``spacing=0``) every copy stands at the same place, so each computes with the same
+numbers as a lone environment and follows it bit for bit whatever the batch's size (a whip
+amplifies a rounding difference of 1e-16 m to centimetres within a second): the ropes do not
+collide with each other (``rod_contact=False``), and in MuJoCo no geom collides through the
+broad phase; each copy's own candidate pairs (those MuJoCo's default filters would test in a
+lone copy) are declared as explicit contact pairs, and MuJoCo solves each copy's constraints as
+its own island. ``spacing > 0`` places copy ``i`` ``i * spacing`` m along x instead (out of
+the swing plane; more than twice the reach so copies never meet): the same physics, rounded
+differently per copy.
 
 Per-environment resets restore that copy's settled state: its arm's joints (and capsule
 chain) in MuJoCo and its rope through the engine's per-rod state. A rope that diverges during
@@ -28,18 +37,19 @@ class HitTargetBatch:
     ``params``: per environment, a dict of rope parameters overriding the config's
     (``youngs_modulus``, ``density``, ``damping``; the domain randomisation)."""
 
-    def __init__(self, config: HitTargetConfig, n: int = 1, spacing: float = 4.0,
+    def __init__(self, config: HitTargetConfig, n: int = 1, spacing: float = 0.0,
                  params: list | None = None) -> None:
         if not isinstance(n, (int, np.integer)) or n < 1:
             raise ValueError(f"num_envs must be an integer >= 1, got {n!r}")
-        if not spacing > 2.0 * (config.rope_length + config.stick_length):
-            raise ValueError(f"spacing must exceed twice the reach of a rope on its stick "
-                             f"({2 * (config.rope_length + config.stick_length):g} m), got "
-                             f"{spacing!r}")
+        reach = 2.0 * (config.rope_length + config.stick_length)
+        if not (spacing == 0.0 or spacing > reach):
+            raise ValueError(f"spacing must be 0 (every copy in one place, bit-identical to a "
+                             f"lone environment) or exceed twice the reach of a rope on its "
+                             f"stick ({reach:g} m), got {spacing!r}")
         self.config = cfg = config
         self.n = int(n)
         self.origins = np.zeros((self.n, 3))
-        self.origins[:, 0] = spacing * np.arange(self.n)
+        self.origins[:, 0] = spacing * np.arange(self.n)  # all zero by default
         base = {k: getattr(cfg, k) for k in RANDOMISABLE}
         self.params = [dict(base, **(params[i] if params else {})) for i in range(self.n)]
         self._target = np.asarray(cfg.target, dtype=np.float64)
@@ -61,6 +71,10 @@ class HitTargetBatch:
 
     # ------------------------------------------------------------------ building
     def _model_xml(self) -> str:
+        return _per_copy_contacts(self._copies_xml(), self.n)
+
+    def _copies_xml(self) -> str:
+        """The ``n`` copies' MJCF with MuJoCo's dynamic (broad-phase) collisions."""
         import mujoco
 
         from deformx import robots
@@ -403,6 +417,82 @@ class HitTargetBatch:
         return {"d": float(self.d[i]), "d_min": float(self.d_min[i]),
                 "d_min_3d": float(self.d_min_3d[i]), "success": bool(success),
                 "diverged": bool(diverged), "joint_targets": self.q_cmd[i].copy()}
+
+
+def _per_copy_contacts(xml: str, n: int) -> str:
+    """``xml`` (copies ``e0_`` ... ``e{n-1}_``) with each copy's geoms colliding only with
+    its own geoms and the world's: the geom pairs MuJoCo's default filters pass within copy 0
+    (contype/conaffinity, same or parent body after welds, excluded body pairs) become
+    explicit pairs of every copy, and no copy geom collides through the broad phase. A pair's
+    unset contact parameters are mixed from its geoms as for a dynamic contact."""
+    import itertools
+
+    import mujoco
+
+    spec = mujoco.MjSpec.from_string(xml)
+    m = spec.compile()
+    ct, ca = m.geom_contype, m.geom_conaffinity
+    weld, parent = m.body_weldid, m.body_parentid
+    excluded = {(min(s >> 16, s & 0xFFFF), max(s >> 16, s & 0xFFFF))
+                for s in np.asarray(m.exclude_signature, dtype=np.int64)}
+    filter_parent = not m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_FILTERPARENT
+    names = [m.geom(g).name for g in range(m.ngeom)]
+    if any(not nm for nm in names):
+        raise ValueError("every geom of the hit-target model needs a name for its contact pairs")
+    own = [g for g in range(m.ngeom) if names[g].startswith("e0_")
+           or not any(names[g].startswith(f"e{i}_") for i in range(n))]
+    pairs = []
+    for a, b in itertools.combinations(own, 2):
+        if not (ct[a] & ca[b] or ct[b] & ca[a]):
+            continue
+        b1, b2 = int(m.geom_bodyid[a]), int(m.geom_bodyid[b])
+        w1, w2 = int(weld[b1]), int(weld[b2])
+        if w1 == w2 or (min(b1, b2), max(b1, b2)) in excluded:
+            continue
+        if filter_parent and w1 and w2 and (w1 == weld[parent[w2]] or w2 == weld[parent[w1]]):
+            continue
+        if not (names[a].startswith("e0_") or names[b].startswith("e0_")):
+            continue  # world-world: no copy's business
+        pairs.append((names[a], names[b]))
+    for g in spec.geoms:
+        if any(g.name.startswith(f"e{i}_") for i in range(n)):
+            g.contype = g.conaffinity = 0
+    index = {nm: g for g, nm in enumerate(names)}
+    mixed = [_mixed_contact(m, index[a], index[b]) for a, b in pairs]
+    for i in range(n):
+        for (a, b), kw in zip(pairs, mixed):
+            spec.add_pair(geomname1=a.replace("e0_", f"e{i}_", 1),
+                          geomname2=b.replace("e0_", f"e{i}_", 1), **kw)
+    return spec.to_xml()
+
+
+def _mixed_contact(m, a: int, b: int) -> dict:
+    """Contact parameters of geoms ``a`` and ``b`` as MuJoCo mixes them for a dynamic
+    contact (an explicit pair does not mix; its own defaults would apply)."""
+    if m.geom_priority[a] != m.geom_priority[b]:
+        g = a if m.geom_priority[a] > m.geom_priority[b] else b
+        condim, f = int(m.geom_condim[g]), m.geom_friction[g]
+        solref, solimp = m.geom_solref[g].copy(), m.geom_solimp[g].copy()
+    else:
+        condim = int(max(m.geom_condim[a], m.geom_condim[b]))
+        f = np.maximum(m.geom_friction[a], m.geom_friction[b])
+        s1, s2 = m.geom_solmix[a], m.geom_solmix[b]
+        if s1 < 1e-15 and s2 < 1e-15:
+            mix = 0.5
+        elif s1 < 1e-15:
+            mix = 0.0
+        elif s2 < 1e-15:
+            mix = 1.0
+        else:
+            mix = s1 / (s1 + s2)
+        r1, r2 = m.geom_solref[a], m.geom_solref[b]
+        solref = (mix * r1 + (1 - mix) * r2 if r1[0] > 0 and r2[0] > 0
+                  else np.minimum(r1, r2))
+        solimp = mix * m.geom_solimp[a] + (1 - mix) * m.geom_solimp[b]
+    return dict(condim=condim, friction=[f[0], f[0], f[1], f[2], f[2]],
+                solref=list(solref), solimp=list(solimp),
+                margin=float(max(m.geom_margin[a], m.geom_margin[b])),
+                gap=float(max(m.geom_gap[a], m.geom_gap[b])))
 
 
 def _flat_rows(views: list) -> tuple[np.ndarray, np.ndarray]:

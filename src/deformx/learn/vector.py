@@ -26,7 +26,8 @@ from .task import HitTargetConfig
 class HitTargetVecEnv(VectorEnv):
     """``num_envs`` hit-target environments stepped together (see the module docstring).
 
-    ``spacing`` (m): the copies stand this far apart along x (out of the swing plane);
+    ``spacing`` (m): 0 (default) puts every copy in one place, each following a lone
+    environment bit for bit; > 0 stands them this far apart along x (out of the swing plane);
     observations are in each copy's own frame. With ``config.randomise`` each copy draws new
     rope parameters at every reset of its episode (``seed``, or the seed given to
     :meth:`reset`), changed in place (:meth:`HitTargetBatch.set_rope`)."""
@@ -34,7 +35,7 @@ class HitTargetVecEnv(VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
     def __init__(self, num_envs: int = 8, target: Any = None, rope: str | None = None,
-                 config: HitTargetConfig | None = None, spacing: float = 4.0, seed: int = 0,
+                 config: HitTargetConfig | None = None, spacing: float = 0.0, seed: int = 0,
                  **overrides: Any) -> None:
         overrides.pop("render_mode", None)  # gymnasium passes it along; frames: single env
         self.config = cfg = make_config(config, target, rope, overrides)
