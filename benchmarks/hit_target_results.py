@@ -75,6 +75,9 @@ def main() -> None:
     parser.add_argument("--select", default="best", choices=["best", "robust"],
                         help="which sampled trajectory is exported (TrainSettings.select; "
                              "robust: Cosserat rows only)")
+    parser.add_argument("--robust-pool", type=int, default=0,
+                        help="a robust choice replays only the best this many in sim "
+                             "(TrainSettings.robust_pool; 0: all)")
     parser.add_argument("--robust-draws", type=int, default=2,
                         help="perturbed draws of the deployment rope a robust choice replays "
                              "on (TrainSettings.robust_draws; with --deploy-*)")
@@ -170,7 +173,8 @@ def main() -> None:
                                                    video=False, select=select,
                                                    rollouts=args.rollouts, task=task,
                                                    deploy=deploy,
-                                                   robust_draws=args.robust_draws),
+                                                   robust_draws=args.robust_draws,
+                                                   robust_pool=args.robust_pool),
                                 progress=False)
                 rank = summary["worst_d_min"] if select == "robust" else summary["d_min"]
                 runs.append((rank, seed, out, summary, time.perf_counter() - t0))

@@ -437,6 +437,8 @@ def test_replayed_actions_give_the_sampled_episodes_and_robust_choice_takes_the_
     assert np.all(np.isfinite(finer)) and np.abs(finer - again).max() > 1e-4
     with pytest.raises(ValueError, match="select"):
         TrainSettings(select="median")
+    with pytest.raises(ValueError, match="robust_pool must be an integer >= 0"):
+        TrainSettings(robust_pool=-1)
     with pytest.raises(ValueError, match="cosserat"):
         TrainSettings(select="robust", task={"rope": "capsule"})
     with pytest.raises(ValueError, match="no action"):
@@ -537,6 +539,21 @@ def test_train_command_writes_a_run_directory(tmp_path):
     assert len(set(np.round(table[summary["best_rollout"]], 9))) > 1  # the draws differ
     _, q = load_trajectory(tmp_path / "fine" / "best_rollout.csv")
     assert replay(q, deployed)[0] == pytest.approx(summary["d_min"], abs=1e-6)
+    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
+                              "256", "--envs", "2", "--rope-dt", "0.001", "--rope-elements",
+                              "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
+                              "--no-video", "--no-progress", "--rollouts", "4",
+                              "--randomise", "0.3", "--deploy-rope-dt", "0.0005",
+                              "--deploy-rope-elements", "16", "--select", "robust",
+                              "--robust-draws", "2", "--robust-pool", "2"])
+    assert res.exit_code == 0, res.output  # only the two best on the deployment rope replayed
+    pooled = np.genfromtxt(tmp_path / "fine" / "rollout_scores.csv", delimiter=",", names=True)
+    table = np.column_stack([pooled[n] for n in pooled.dtype.names])
+    best_two = np.argsort(table[:, 0])[:2]
+    assert np.isnan(table[:, 1:]).sum(axis=0).tolist() == [2, 2]
+    assert np.all(np.isfinite(table[best_two]))
+    summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
+    assert summary["best_rollout"] == best_two[np.argmin(table[best_two].max(axis=1))]
     res = runner.invoke(app, ["train", "hit-target", "--rope", "capsule", "--deploy-rope-dt",
                               "0.0005", "--out", str(out)])
     assert res.exit_code != 0 and "deploy" in res.output

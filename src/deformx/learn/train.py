@@ -68,6 +68,9 @@ class TrainSettings:
                                              # ``robust_draws`` perturbed draws of it)
     robust_draws: int = 2                    # perturbed draws of the deployment rope a
                                              # robust choice with deploy replays on
+    robust_pool: int = 0                     # a robust choice among the robust_pool
+                                             # trajectories best on the rope they were drawn
+                                             # on (0: all): more rollouts for as many replays
     task: dict = field(default_factory=dict)  # HitTargetConfig overrides (target, rope, ...)
     deploy: dict = field(default_factory=dict)  # HitTargetConfig changes of the training rope
                                                 # for the rope the trajectories are generated
@@ -79,6 +82,9 @@ class TrainSettings:
             v = getattr(self, name)
             if not isinstance(v, (int, np.integer)) or v < 1:
                 raise ValueError(f"{name} must be an integer >= 1, got {v!r}")
+        if not isinstance(self.robust_pool, (int, np.integer)) or self.robust_pool < 0:
+            raise ValueError(f"robust_pool must be an integer >= 0 (0: every rollout), got "
+                             f"{self.robust_pool!r}")
         if self.select not in ("best", "robust"):
             raise ValueError(f"select must be 'best' or 'robust', got {self.select!r}")
         if self.deploy:
@@ -267,18 +273,28 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
     samples = sample_rollouts(mean_action, config, n=settings.rollouts, std=settings.std,
                               seed=settings.seed)
     scores = {"d_min": np.where(samples["diverged"], np.inf, samples["d_min"])}
+    n = len(samples["actions"])
+    # the trajectories a robust choice replays: the pool best where they were drawn
+    pool = (np.argsort(scores["d_min"], kind="stable")[:settings.robust_pool]
+            if settings.robust_pool else np.arange(n))
+
+    def on(rope: HitTargetConfig, seed: int) -> np.ndarray:  # NaN: not in the pool
+        d = np.full(n, np.nan)
+        d[pool] = replay_actions([samples["actions"][i] for i in pool], rope, seed=seed)
+        return d
+
     if settings.select == "robust" and settings.deploy:
         perturbed = replace(config, randomise=REPLAY_PERTURBATION)
         for k in range(DEPLOY_ROBUST_FIRST_SEED,
                        DEPLOY_ROBUST_FIRST_SEED + settings.robust_draws):
-            scores[f"perturbed_seed{k}"] = replay_actions(samples["actions"], perturbed, seed=k)
+            scores[f"perturbed_seed{k}"] = on(perturbed, k)
     elif settings.select == "robust":
         for k, m in enumerate(ROBUST_MODELS):
             scores[";".join(f"{a}={b}" for a, b in m.items() if a != "randomise")
-                   or f"perturbed_seed{k + 1}"] = replay_actions(
-                samples["actions"], replace(config, **m), seed=k + 1)
-    score = np.max(list(scores.values()), axis=0)
-    # every sampled trajectory's d_min (m) on each rope the choice looked at
+                   or f"perturbed_seed{k + 1}"] = on(replace(config, **m), k + 1)
+    score = np.nan_to_num(np.max(list(scores.values()), axis=0), nan=np.inf)
+    # every sampled trajectory's d_min (m) on each rope the choice looked at (nan: not
+    # replayed there)
     np.savetxt(out / "rollout_scores.csv", np.column_stack(list(scores.values())),
                delimiter=",", header=",".join(scores), comments="", fmt="%.6g")
     best = int(np.argmin(score))
