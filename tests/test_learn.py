@@ -223,11 +223,11 @@ def test_per_copy_contact_pairs_are_the_contacts_mujoco_finds_itself(rope):
     friction and solver parameters, and the same accelerations."""
     import mujoco
 
-    from deformx.learn.batch import HitTargetBatch, _per_copy_contacts
+    from deformx.learn.batch import HitTargetBatch
 
     batch = HitTargetBatch(HitTargetConfig(settle_time=0.0, rope=rope), 1)
     dynamic = mujoco.MjModel.from_xml_string(batch._copies_xml())
-    paired = mujoco.MjModel.from_xml_string(_per_copy_contacts(batch._copies_xml(), 1))
+    paired = batch.backend.model
     assert paired.npair > 0 and not paired.geom_contype[1:].any()
     dd, dp = mujoco.MjData(dynamic), mujoco.MjData(paired)
     rng = np.random.default_rng(1)

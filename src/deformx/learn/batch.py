@@ -71,10 +71,16 @@ class HitTargetBatch:
 
     # ------------------------------------------------------------------ building
     def _model_xml(self) -> str:
-        return _per_copy_contacts(self._copies_xml(), self.n)
+        spec = self._copies_spec(self.n)
+        _per_copy_contacts(spec, self._copies_spec(1).compile())
+        return spec.to_xml()
 
     def _copies_xml(self) -> str:
-        """The ``n`` copies' MJCF with MuJoCo's dynamic (broad-phase) collisions."""
+        """The copies' MJCF with MuJoCo's dynamic (broad-phase) collisions."""
+        return self._copies_spec(self.n).to_xml()
+
+    def _copies_spec(self, n: int):
+        """The first ``n`` copies (prefixes ``e0_`` ...) in one ``mujoco.MjSpec``."""
         import mujoco
 
         from deformx import robots
@@ -84,24 +90,26 @@ class HitTargetBatch:
             f'<mujoco><option timestep="{cfg.control_dt:.17g}" integrator="implicitfast"/>'
             '<worldbody><geom name="floor" type="plane" size="0 0 0.05" '
             'rgba="0.55 0.55 0.5 1"/></worldbody></mujoco>')
-        for i in range(self.n):
-            arm = mujoco.MjSpec.from_string(robots.ur5e(
+        for i, p in enumerate(self.params[:n]):
+            arm = robots.ur5e(
                 tool_length=cfg.stick_length,
                 base_position=tuple(np.asarray(cfg.base_position) + self.origins[i]),
                 base_rotation=rot_x(cfg.base_rotation_x), ur_base_link=True, q0=cfg.q0,
-                timestep=cfg.control_dt))
-            root.attach(arm, prefix=f"e{i}_", frame=root.worldbody.add_frame())
-        xml = root.to_xml()
-        if cfg.rope == "capsule":
-            for i, p in enumerate(self.params):
-                xml = robots.capsule_rope(xml, parent=f"e{i}_tool_tip", length=cfg.rope_length,
+                timestep=cfg.control_dt)
+            if cfg.rope == "capsule":  # on its own arm: a whole-model round trip per copy
+                arm = robots.capsule_rope(arm, parent="tool_tip", length=cfg.rope_length,
                                           n_segments=cfg.n_elements, radius=cfg.radius,
                                           density=p["density"],
                                           youngs_modulus=p["youngs_modulus"],
                                           damping=cfg.capsule_damping,
                                           armature=cfg.capsule_armature,
-                                          timestep=cfg.control_dt, name=f"e{i}_rope")
-        return xml
+                                          timestep=cfg.control_dt, name="rope")
+            arm = mujoco.MjSpec.from_string(arm)
+            for key in list(arm.keys):  # the batch poses its copies itself
+                arm.delete(key)
+            arm.nkey = 0  # (a model written back to MJCF declares its keyframes' count)
+            root.attach(arm, prefix=f"e{i}_", frame=root.worldbody.add_frame())
+        return root
 
     def _build(self) -> None:
         import mujoco
@@ -419,18 +427,19 @@ class HitTargetBatch:
                 "diverged": bool(diverged), "joint_targets": self.q_cmd[i].copy()}
 
 
-def _per_copy_contacts(xml: str, n: int) -> str:
-    """``xml`` (copies ``e0_`` ... ``e{n-1}_``) with each copy's geoms colliding only with
-    its own geoms and the world's: the geom pairs MuJoCo's default filters pass within copy 0
-    (contype/conaffinity, same or parent body after welds, excluded body pairs) become
-    explicit pairs of every copy, and no copy geom collides through the broad phase. A pair's
-    unset contact parameters are mixed from its geoms as for a dynamic contact."""
+def _per_copy_contacts(spec, lone) -> None:
+    """Make each copy's geoms (prefixes ``e0_``, ``e1_``, ... in ``spec``, a ``mujoco.MjSpec``)
+    collide only with their own copy's and the world's: the geom pairs MuJoCo's default
+    filters pass in ``lone`` (the compiled model of copy 0 alone: contype/conaffinity, same or
+    parent body after welds, excluded body pairs) become explicit pairs of every copy, with the
+    contact parameters MuJoCo mixes for a dynamic contact, and no copy geom collides through
+    the broad phase."""
     import itertools
+    import re
 
     import mujoco
 
-    spec = mujoco.MjSpec.from_string(xml)
-    m = spec.compile()
+    m = lone
     ct, ca = m.geom_contype, m.geom_conaffinity
     weld, parent = m.body_weldid, m.body_parentid
     excluded = {(min(s >> 16, s & 0xFFFF), max(s >> 16, s & 0xFFFF))
@@ -439,10 +448,8 @@ def _per_copy_contacts(xml: str, n: int) -> str:
     names = [m.geom(g).name for g in range(m.ngeom)]
     if any(not nm for nm in names):
         raise ValueError("every geom of the hit-target model needs a name for its contact pairs")
-    own = [g for g in range(m.ngeom) if names[g].startswith("e0_")
-           or not any(names[g].startswith(f"e{i}_") for i in range(n))]
     pairs = []
-    for a, b in itertools.combinations(own, 2):
+    for a, b in itertools.combinations(range(m.ngeom), 2):
         if not (ct[a] & ca[b] or ct[b] & ca[a]):
             continue
         b1, b2 = int(m.geom_bodyid[a]), int(m.geom_bodyid[b])
@@ -453,17 +460,18 @@ def _per_copy_contacts(xml: str, n: int) -> str:
             continue
         if not (names[a].startswith("e0_") or names[b].startswith("e0_")):
             continue  # world-world: no copy's business
-        pairs.append((names[a], names[b]))
+        pairs.append((names[a], names[b], _mixed_contact(m, a, b)))
+    copy_geom = re.compile(r"e(\d+)_")
+    copies = set()
     for g in spec.geoms:
-        if any(g.name.startswith(f"e{i}_") for i in range(n)):
+        match = copy_geom.match(g.name)
+        if match:
             g.contype = g.conaffinity = 0
-    index = {nm: g for g, nm in enumerate(names)}
-    mixed = [_mixed_contact(m, index[a], index[b]) for a, b in pairs]
-    for i in range(n):
-        for (a, b), kw in zip(pairs, mixed):
+            copies.add(int(match.group(1)))
+    for i in sorted(copies):
+        for a, b, kw in pairs:
             spec.add_pair(geomname1=a.replace("e0_", f"e{i}_", 1),
                           geomname2=b.replace("e0_", f"e{i}_", 1), **kw)
-    return spec.to_xml()
 
 
 def _mixed_contact(m, a: int, b: int) -> dict:
