@@ -9,7 +9,8 @@ amplifies a rounding difference of 1e-16 m to centimetres within a second): the 
 collide with each other (``rod_contact=False``), and in MuJoCo no geom collides through the
 broad phase; each copy's own candidate pairs (those MuJoCo's default filters would test in a
 lone copy) are declared as explicit contact pairs, and MuJoCo solves each copy's constraints as
-its own island. ``spacing > 0`` places copy ``i`` ``i * spacing`` m along x instead (out of
+its own island (a capsule chain's copies agree to ~1e-7 m only: MuJoCo decides its solver's
+warm start for the whole model at once). ``spacing > 0`` places copy ``i`` ``i * spacing`` m along x instead (out of
 the swing plane; more than twice the reach so copies never meet): the same physics, rounded
 differently per copy.
 
