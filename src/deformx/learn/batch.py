@@ -9,8 +9,8 @@ amplifies a rounding difference of 1e-16 m to centimetres within a second): the 
 collide with each other (``rod_contact=False``), and in MuJoCo no geom collides through the
 broad phase; each copy's own candidate pairs (those MuJoCo's default filters would test in a
 lone copy) are declared as explicit contact pairs, and MuJoCo solves each copy's constraints as
-its own island (a capsule chain's copies agree to ~1e-7 m only: MuJoCo decides its solver's
-warm start for the whole model at once). ``spacing > 0`` places copy ``i`` ``i * spacing`` m along x instead (out of
+its own island, from a cold start (MuJoCo decides its solver's warm start for the whole model
+at once: with it a capsule chain's copies agreed to ~1e-7 m only). ``spacing > 0`` places copy ``i`` ``i * spacing`` m along x instead (out of
 the swing plane; more than twice the reach so copies never meet): the same physics, rounded
 differently per copy.
 
@@ -88,7 +88,10 @@ class HitTargetBatch:
 
         cfg = self.config
         root = mujoco.MjSpec.from_string(
-            f'<mujoco><option timestep="{cfg.control_dt:.17g}" integrator="implicitfast"/>'
+            # no solver warm start: MuJoCo decides it for the whole model at once, and a
+            # copy's contacts would then start from a guess that depends on the others'
+            f'<mujoco><option timestep="{cfg.control_dt:.17g}" integrator="implicitfast">'
+            '<flag warmstart="disable"/></option>'
             '<worldbody><geom name="floor" type="plane" size="0 0 0.05" '
             'rgba="0.55 0.55 0.5 1"/></worldbody></mujoco>')
         for i, p in enumerate(self.params[:n]):
