@@ -10,9 +10,9 @@ collide with each other (``rod_contact=False``), and in MuJoCo no geom collides 
 broad phase; each copy's own candidate pairs (those MuJoCo's default filters would test in a
 lone copy) are declared as explicit contact pairs, and MuJoCo solves each copy's constraints as
 its own island, from a cold start (MuJoCo decides its solver's warm start for the whole model
-at once: with it a capsule chain's copies agreed to ~1e-7 m only). ``spacing > 0`` places copy ``i`` ``i * spacing`` m along x instead (out of
-the swing plane; more than twice the reach so copies never meet): the same physics, rounded
-differently per copy.
+at once: with it a capsule chain's copies agreed to ~1e-7 m only). ``spacing > 0`` places
+copy ``i`` ``i * spacing`` m along x instead (out of the swing plane; more than twice the
+reach so copies never meet): the same physics, rounded differently per copy.
 
 Per-environment resets restore that copy's settled state: its arm's joints (and capsule
 chain) in MuJoCo and its rope through the engine's per-rod state. A rope that diverges during
