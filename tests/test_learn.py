@@ -503,11 +503,11 @@ def test_train_command_writes_a_run_directory(tmp_path):
     summary = json.loads((tmp_path / "norm" / "summary.json").read_text())
     assert summary["timesteps"] == 1024 and summary["select"] == "robust"
     assert summary["worst_d_min"] >= summary["d_min"] - 1e-9
-    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
-                              "256", "--envs", "2", "--rope-dt", "0.001", "--rope-elements",
-                              "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
-                              "--no-video", "--no-progress", "--rollouts", "2",
-                              "--randomise", "0.3"])
+    fine = ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps", "256", "--envs",
+            "2", "--rope-dt", "0.001", "--rope-elements", "12", "--rope-order", "1", "--out",
+            str(tmp_path / "fine"), "--no-video", "--no-progress", "--randomise", "0.3"]
+    on_finer = fine + ["--deploy-rope-dt", "0.0005", "--deploy-rope-elements", "16"]
+    res = runner.invoke(app, fine + ["--rollouts", "2"])
     assert res.exit_code == 0, res.output  # a finer training rope, from the command line
     task = json.loads((tmp_path / "fine" / "settings.json").read_text())["task"]
     assert (task["n_elements"], task["order"], task["rope_dt"]) == (12, 1, 0.001)
@@ -517,12 +517,7 @@ def test_train_command_writes_a_run_directory(tmp_path):
     d_min = json.loads((tmp_path / "fine" / "summary.json").read_text())["d_min"]
     assert replay(q, nominal)[0] == pytest.approx(d_min, abs=1e-6)  # (the CSV: 1e-9 rad)
     # the same run (no more training), its trajectories generated and chosen on a finer rope
-    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
-                              "256", "--envs", "2", "--rope-dt", "0.001", "--rope-elements",
-                              "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
-                              "--no-video", "--no-progress", "--rollouts", "2",
-                              "--randomise", "0.3", "--deploy-rope-dt", "0.0005",
-                              "--deploy-rope-elements", "16"])
+    res = runner.invoke(app, on_finer + ["--rollouts", "2"])
     assert res.exit_code == 0, res.output
     summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
     assert summary["timesteps"] == 256
@@ -531,13 +526,8 @@ def test_train_command_writes_a_run_directory(tmp_path):
     deployed = replace(nominal, n_elements=16, rope_dt=5e-4)
     assert replay(q, deployed)[0] == pytest.approx(summary["d_min"], abs=1e-6)
     assert abs(replay(q, nominal)[0] - summary["d_min"]) > 1e-5  # another rope
-    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
-                              "256", "--envs", "2", "--rope-dt", "0.001", "--rope-elements",
-                              "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
-                              "--no-video", "--no-progress", "--rollouts", "3",
-                              "--randomise", "0.3", "--deploy-rope-dt", "0.0005",
-                              "--deploy-rope-elements", "16", "--select", "robust",
-                              "--robust-draws", "3"])
+    res = runner.invoke(app, on_finer + ["--rollouts", "3", "--select", "robust",
+                                         "--robust-draws", "3"])
     assert res.exit_code == 0, res.output  # robust: the deployment rope and perturbed draws
     summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
     assert summary["select"] == "robust" and summary["worst_d_min"] >= summary["d_min"] - 1e-9
@@ -551,13 +541,8 @@ def test_train_command_writes_a_run_directory(tmp_path):
     assert len(set(np.round(table[summary["best_rollout"]], 9))) > 1  # the draws differ
     _, q = load_trajectory(tmp_path / "fine" / "best_rollout.csv")
     assert replay(q, deployed)[0] == pytest.approx(summary["d_min"], abs=1e-6)
-    res = runner.invoke(app, ["train", "hit-target", "--target", "0", "1.0", "0.6", "--steps",
-                              "256", "--envs", "2", "--rope-dt", "0.001", "--rope-elements",
-                              "12", "--rope-order", "1", "--out", str(tmp_path / "fine"),
-                              "--no-video", "--no-progress", "--rollouts", "4",
-                              "--randomise", "0.3", "--deploy-rope-dt", "0.0005",
-                              "--deploy-rope-elements", "16", "--select", "robust",
-                              "--robust-draws", "2", "--robust-pool", "2"])
+    res = runner.invoke(app, on_finer + ["--rollouts", "4", "--select", "robust",
+                                         "--robust-draws", "2", "--robust-pool", "2"])
     assert res.exit_code == 0, res.output  # only the two best on the deployment rope replayed
     pooled = np.genfromtxt(tmp_path / "fine" / "rollout_scores.csv", delimiter=",", names=True)
     table = np.column_stack([pooled[n] for n in pooled.dtype.names])
