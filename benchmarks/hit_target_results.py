@@ -78,6 +78,9 @@ def main() -> None:
     parser.add_argument("--robust-pool", type=int, default=0,
                         help="a robust choice replays only the best this many in sim "
                              "(TrainSettings.robust_pool; 0: all)")
+    parser.add_argument("--robust-within", type=float, default=0.0,
+                        help="m: a robust choice only among the trajectories within this "
+                             "d_min in sim (TrainSettings.robust_within; 0: no bound)")
     parser.add_argument("--robust-draws", type=int, default=2,
                         help="perturbed draws of the deployment rope a robust choice replays "
                              "on (TrainSettings.robust_draws; with --deploy-*)")
@@ -174,7 +177,8 @@ def main() -> None:
                                                    rollouts=args.rollouts, task=task,
                                                    deploy=deploy,
                                                    robust_draws=args.robust_draws,
-                                                   robust_pool=args.robust_pool),
+                                                   robust_pool=args.robust_pool,
+                                                   robust_within=args.robust_within),
                                 progress=False)
                 rank = summary["worst_d_min"] if select == "robust" else summary["d_min"]
                 runs.append((rank, seed, out, summary, time.perf_counter() - t0))

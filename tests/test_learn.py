@@ -451,6 +451,8 @@ def test_replayed_actions_give_the_sampled_episodes_and_robust_choice_takes_the_
         TrainSettings(select="median")
     with pytest.raises(ValueError, match="robust_pool must be an integer >= 0"):
         TrainSettings(robust_pool=-1)
+    with pytest.raises(ValueError, match="robust_within must be a distance >= 0 m"):
+        TrainSettings(robust_within=-0.01)
     with pytest.raises(ValueError, match="cosserat"):
         TrainSettings(select="robust", task={"rope": "capsule"})
     with pytest.raises(ValueError, match="no action"):
@@ -551,6 +553,19 @@ def test_train_command_writes_a_run_directory(tmp_path):
     assert np.all(np.isfinite(table[best_two]))
     summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
     assert summary["best_rollout"] == best_two[np.argmin(table[best_two].max(axis=1))]
+    # bounded: the least worst among the trajectories within a d_min where they were drawn
+    bound = float(np.sort(table[:, 0])[1:3].mean())  # (the same four trajectories)
+    res = runner.invoke(app, on_finer + ["--rollouts", "4", "--select", "robust",
+                                         "--robust-draws", "2", "--robust-within",
+                                         repr(bound)])
+    assert res.exit_code == 0, res.output
+    full = np.genfromtxt(tmp_path / "fine" / "rollout_scores.csv", delimiter=",", names=True)
+    table = np.column_stack([full[n] for n in full.dtype.names])
+    assert np.all(np.isfinite(table))
+    within = np.flatnonzero(table[:, 0] <= bound)
+    summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
+    assert len(within) == 2 and summary["robust_within"] == pytest.approx(bound)
+    assert summary["best_rollout"] == within[np.argmin(table[within].max(axis=1))]
     res = runner.invoke(app, ["train", "hit-target", "--rope", "capsule", "--deploy-rope-dt",
                               "0.0005", "--out", str(out)])
     assert res.exit_code != 0 and "deploy" in res.output

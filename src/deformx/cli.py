@@ -454,6 +454,7 @@ def train(
     select: str = typer.Option("best", "--select", help="best: least d_min on the training rope (the paper); robust: least worst d_min over it and finer-step, perturbed and 40-element ropes (Cosserat only; with --deploy-*: over the deployment rope and --robust-draws perturbed draws of it)."),
     robust_draws: int = typer.Option(2, "--robust-draws", min=1, help="Perturbed draws of the deployment rope a robust choice replays every trajectory on (with --deploy-*; more: a choice less lucky on its draws, each draw one more replay of all the rollouts)."),
     robust_pool: int = typer.Option(0, "--robust-pool", min=0, help="A robust choice replays only this many trajectories, the best on the rope they were generated on (0: all): with more --rollouts, a larger sample for the same replays."),
+    robust_within: float = typer.Option(0.0, "--robust-within", min=0.0, help="m: a robust choice only among the trajectories within this d_min on the rope they were generated on, e.g. the paper's in-sim figure (0: no bound; none within: among all)."),
     deploy_rope_dt: Optional[float] = typer.Option(None, "--deploy-rope-dt", help="Generate and choose the trajectories on a Cosserat rope of this step (s) instead of the training rope's (e.g. 1.25e-5, finer than training affords)."),
     deploy_rope_elements: Optional[int] = typer.Option(None, "--deploy-rope-elements", min=2, help="Elements of the rope the trajectories are generated on (default: the training rope's)."),
     deploy_rope_order: Optional[int] = typer.Option(None, "--deploy-rope-order", min=1, max=2, help="Its stable integrator's order (default: the training rope's)."),
@@ -483,6 +484,7 @@ def train(
         settings = TrainSettings(total_steps=steps, num_envs=envs, seed=seed, video=video,
                                  normalize=normalize, rollouts=rollouts, select=select,
                                  robust_draws=robust_draws, robust_pool=robust_pool,
+                                 robust_within=robust_within,
                                  task=overrides, deploy=deploy)
         from .learn.task import HitTargetConfig
         from .learn.train import deployed

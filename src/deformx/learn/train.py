@@ -71,6 +71,9 @@ class TrainSettings:
     robust_pool: int = 0                     # a robust choice among the robust_pool
                                              # trajectories best on the rope they were drawn
                                              # on (0: all): more rollouts for as many replays
+    robust_within: float = 0.0               # m: a robust choice among the trajectories
+                                             # within this d_min on the rope they were drawn
+                                             # on (0: no bound; none within: among all)
     task: dict = field(default_factory=dict)  # HitTargetConfig overrides (target, rope, ...)
     deploy: dict = field(default_factory=dict)  # HitTargetConfig changes of the training rope
                                                 # for the rope the trajectories are generated
@@ -85,6 +88,10 @@ class TrainSettings:
         if not isinstance(self.robust_pool, (int, np.integer)) or self.robust_pool < 0:
             raise ValueError(f"robust_pool must be an integer >= 0 (0: every rollout), got "
                              f"{self.robust_pool!r}")
+        if not (isinstance(self.robust_within, (int, float, np.floating))
+                and 0.0 <= self.robust_within < math.inf):
+            raise ValueError(f"robust_within must be a distance >= 0 m (0: no bound), got "
+                             f"{self.robust_within!r}")
         if self.select not in ("best", "robust"):
             raise ValueError(f"select must be 'best' or 'robust', got {self.select!r}")
         if self.deploy:
@@ -293,6 +300,11 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
             scores[";".join(f"{a}={b}" for a, b in m.items() if a != "randomise")
                    or f"perturbed_seed{k + 1}"] = on(replace(config, **m), k + 1)
     score = np.nan_to_num(np.max(list(scores.values()), axis=0), nan=np.inf)
+    if settings.select == "robust" and settings.robust_within > 0.0:
+        # the least worst among those as close as asked where they were drawn, if any is
+        within = (scores["d_min"] <= settings.robust_within) & np.isfinite(score)
+        if within.any():
+            score = np.where(within, score, np.inf)
     # every sampled trajectory's d_min (m) on each rope the choice looked at (nan: not
     # replayed there)
     np.savetxt(out / "rollout_scores.csv", np.column_stack(list(scores.values())),
@@ -305,6 +317,7 @@ def train(out: str | Path, settings: TrainSettings | None = None, resume: bool =
     summary = {"timesteps": int(model.num_timesteps), "d_min": result["d_min"],
                "d_min_3d": result["d_min_3d"], "success": result["success"],
                "rollouts": settings.rollouts, "best_rollout": best, "select": settings.select,
+               "robust_within": settings.robust_within,
                "deploy": dict(settings.deploy),
                "worst_d_min": max(float(score[best]), result["d_min"]),
                "d_min_deterministic": float(samples["d_min"][0]),
