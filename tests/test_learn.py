@@ -470,6 +470,12 @@ def test_replayed_actions_give_the_sampled_episodes_and_robust_choice_takes_the_
     assert deployed(jumped, {"n_elements": 30}).continuous_drivers is False
 
 
+def _rollout_scores(run):
+    """Column names and table (rollouts x columns, m) of a run's rollout_scores.csv."""
+    scores = np.genfromtxt(run / "rollout_scores.csv", delimiter=",", names=True)
+    return scores.dtype.names, np.column_stack([scores[n] for n in scores.dtype.names])
+
+
 def test_train_command_writes_a_run_directory(tmp_path):
     pytest.importorskip("stable_baselines3")
     import json
@@ -534,10 +540,9 @@ def test_train_command_writes_a_run_directory(tmp_path):
     summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
     assert summary["select"] == "robust" and summary["worst_d_min"] >= summary["d_min"] - 1e-9
     # each rollout's d_min on the deployment rope and on each draw; the choice: least worst
-    scores = np.genfromtxt(tmp_path / "fine" / "rollout_scores.csv", delimiter=",", names=True)
-    assert scores.dtype.names == ("d_min", "perturbed_seed11", "perturbed_seed12",
-                                  "perturbed_seed13") and len(scores) == 3
-    table = np.column_stack([scores[n] for n in scores.dtype.names])
+    names, table = _rollout_scores(tmp_path / "fine")
+    assert names == ("d_min", "perturbed_seed11", "perturbed_seed12",
+                     "perturbed_seed13") and len(table) == 3
     assert summary["best_rollout"] == int(np.argmin(table.max(axis=1)))
     assert summary["d_min"] == pytest.approx(table[summary["best_rollout"], 0], abs=1e-6)
     assert len(set(np.round(table[summary["best_rollout"]], 9))) > 1  # the draws differ
@@ -546,8 +551,7 @@ def test_train_command_writes_a_run_directory(tmp_path):
     res = runner.invoke(app, on_finer + ["--rollouts", "4", "--select", "robust",
                                          "--robust-draws", "2", "--robust-pool", "2"])
     assert res.exit_code == 0, res.output  # only the two best on the deployment rope replayed
-    pooled = np.genfromtxt(tmp_path / "fine" / "rollout_scores.csv", delimiter=",", names=True)
-    table = np.column_stack([pooled[n] for n in pooled.dtype.names])
+    _, table = _rollout_scores(tmp_path / "fine")
     best_two = np.argsort(table[:, 0])[:2]
     assert np.isnan(table[:, 1:]).sum(axis=0).tolist() == [2, 2]
     assert np.all(np.isfinite(table[best_two]))
@@ -559,8 +563,7 @@ def test_train_command_writes_a_run_directory(tmp_path):
                                          "--robust-draws", "2", "--robust-within",
                                          repr(bound)])
     assert res.exit_code == 0, res.output
-    full = np.genfromtxt(tmp_path / "fine" / "rollout_scores.csv", delimiter=",", names=True)
-    table = np.column_stack([full[n] for n in full.dtype.names])
+    _, table = _rollout_scores(tmp_path / "fine")
     assert np.all(np.isfinite(table))
     within = np.flatnonzero(table[:, 0] <= bound)
     summary = json.loads((tmp_path / "fine" / "summary.json").read_text())
