@@ -671,10 +671,12 @@ class World:
         second-order step that did not converge was retried whole by backward Euler
         (``first_order_retries``; ``order=2`` only), and how many rod steps started from the
         Newton factor of an earlier step (``reused_factors``: calm steps, see
-        docs/integrators.md)."""
+        docs/integrators.md), and how many steps that did not converge were retried without
+        the solver's shortcuts before any halving (``careful_retries``, docs/contact.md)."""
         if self.integrator != "stable" or self._rods_p is None:
             return {"steps": 0, "mean_iterations": 0.0, "capped_steps": 0, "last_update": 0.0,
-                    "halvings": 0, "first_order_retries": 0, "reused_factors": 0}
+                    "halvings": 0, "first_order_retries": 0, "reused_factors": 0,
+                    "careful_retries": 0}
         st = self._rods_p["stats"]
         return {"steps": int(st[:, 0].max()),
                 "mean_iterations": float(st[:, 1].sum() / max(st[:, 0].sum(), 1)),
@@ -682,7 +684,8 @@ class World:
                 "last_update": float(st[:, 3].max()),
                 "halvings": int(st[:, 4].sum()),
                 "first_order_retries": int(st[:, 6].sum()),
-                "reused_factors": int(st[:, 7].sum())}
+                "reused_factors": int(st[:, 7].sum()),
+                "careful_retries": int(st[:, 8].sum())}
 
     def contact_forces(self, rod: Rod) -> np.ndarray:
         """Contact forces (n_nodes, 3), N, on ``rod``'s nodes in the last step: planes,

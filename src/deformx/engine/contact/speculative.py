@@ -34,7 +34,8 @@ planes and colliders; a collider may give two): ``sp_i[q, k]`` = (source, anchor
 the last step, active-set state), source
 -1 for none, ``p`` for world plane ``p``, ``L + c`` for collider ``c``; ``sp_f[q, k]`` = point
 (3), normal (3) in the source's frame, segment parameter, d0, anchor point (3) in the source's
-frame, anchored segment parameter, current penetration and normal force (scratch).
+frame, anchored segment parameter, current penetration and normal force (scratch), the offset,
+the friction bound frozen for the step, and the stiffness multiplier of ``stiffen_deep``.
 """
 
 from __future__ import annotations
@@ -46,19 +47,20 @@ from numba import njit
 from ..kernels.bundles import (
     N_CONTACT_FORCE, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS, R_COUPLED,
 )
-from .plane import PL_MUK, PL_MUS, V_OUT, plane_penalty
+from .plane import PL_AUTO, PL_MUK, PL_MUS, V_OUT, plane_penalty
 from .primitives import tangent_bound
 from .segments import (
-    MESH, P_MUK, P_MUS, P_SHAPE, _add_reaction, _mesh_closest, _rotate, _shape_closest,
+    MESH, P_AUTO, P_MUK, P_MUS, P_SHAPE, _add_reaction, _mesh_closest, _rotate, _shape_closest,
     _to_local, _to_world, collider_penalty,
 )
 from ..kernels.refcount import NO_REFCOUNT
 
 SP_K = 2  # contact planes per query slot
-SP_COLS_I, SP_COLS_F = 5, 16
+SP_COLS_I, SP_COLS_F = 5, 17
 SP_SRC, SP_ANCHORED, SP_SLIDING, SP_SET, SP_FLIPS = 0, 1, 2, 3, 4
 SP_Q, SP_N, SP_S, SP_D0, SP_A, SP_AS, SP_PEN, SP_FN, SP_OFF, SP_FROZEN = (
     0, 3, 6, 7, 8, 11, 12, 13, 14, 15)
+SP_KMUL = 16
 # SP_SET: within a step a contact is inactive (0), active (1) or released (2: a plane that
 # pulled near convergence, out for the rest of the step); SP_FLIPS counts its switches.
 INACTIVE, ACTIVE, RELEASED = 0, 1, 2
@@ -88,6 +90,12 @@ MARGIN = 2.0  # the speculative margin is this many times the step's relative tr
 # The friction's coupling to the normal force enters the Newton matrix where it is at least
 # this fraction of mu times the normal stiffness (sliding, not sticking).
 MIN_COUPLING = 0.01
+# A pushing contact found deeper than this many radii at a converged iterate is stiffened (its
+# automatic penalty, by the square of its depth over IMPACT_DEPTH, up to MAX_KMUL times) and the
+# step iterates on: the automatic penalty is sized for an impact of the point's own mass, and a
+# rope's tension pulling a node into a box's edge or the whip of its free end can press harder.
+STIFFEN_DEPTH = 0.15
+MAX_KMUL = 64.0
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -191,9 +199,9 @@ def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
     old_on = (sp_i[slot, 0, SP_ANCHORED], sp_i[slot, 1, SP_ANCHORED])
     old_sliding = (sp_i[slot, 0, SP_SLIDING], sp_i[slot, 1, SP_SLIDING])
     old_a = ((sp_f[slot, 0, SP_A], sp_f[slot, 0, SP_A + 1], sp_f[slot, 0, SP_A + 2],
-              sp_f[slot, 0, SP_AS], sp_f[slot, 0, SP_OFF]),
+              sp_f[slot, 0, SP_AS], sp_f[slot, 0, SP_OFF], sp_f[slot, 0, SP_KMUL]),
              (sp_f[slot, 1, SP_A], sp_f[slot, 1, SP_A + 1], sp_f[slot, 1, SP_A + 2],
-              sp_f[slot, 1, SP_AS], sp_f[slot, 1, SP_OFF]))
+              sp_f[slot, 1, SP_AS], sp_f[slot, 1, SP_OFF], sp_f[slot, 1, SP_KMUL]))
     for k in range(SP_K):
         src = keep_src[k]
         sp_i[slot, k, SP_SRC] = src
@@ -202,6 +210,7 @@ def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
         sp_i[slot, k, SP_SET] = INACTIVE
         sp_i[slot, k, SP_FLIPS] = 0
         sp_f[slot, k, SP_FROZEN] = -1.0
+        sp_f[slot, k, SP_KMUL] = 1.0
         if src < 0:
             continue
         for d in range(7):
@@ -214,6 +223,7 @@ def _store(sp_i, sp_f, slot, keep_src, keep_f, keep_n, x_start, s_start):
                     sp_f[slot, k, SP_A + d] = old_a[j][d]
                 sp_f[slot, k, SP_AS] = old_a[j][3]
                 sp_f[slot, k, SP_OFF] = old_a[j][4]
+                sp_f[slot, k, SP_KMUL] = max(old_a[j][5], 1.0)  # (the load that needed it lasts)
         if sp_i[slot, k, SP_ANCHORED] == 0:
             sp_f[slot, k, SP_A] = x_start[k, 0]
             sp_f[slot, k, SP_A + 1] = x_start[k, 1]
@@ -460,6 +470,7 @@ def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> i
             sp_f[slot, pick, SP_D0] = min(d0, 0.0)
             sp_f[slot, pick, SP_OFF] = 0.0
             sp_f[slot, pick, SP_FROZEN] = -1.0
+            sp_f[slot, pick, SP_KMUL] = 1.0
             sp_f[slot, pick, SP_PEN] = pen
             sp_f[slot, pick, SP_FN] = 0.0
             added += 1
@@ -559,8 +570,10 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
             d0 = sp_f[slot, j, SP_D0]
             m = wa * mass[a] + wb * mass[b]
             kmin = wa * node_kmin[a] + wb * node_kmin[b]
+            # (a stiffness multiplier kmul shortens the reference step by sqrt(kmul))
             kc, cc, mu_s, mu_k = _law(src, n_planes, planes, par, m, kmin,
-                                      min(dt_ref, 0.2 / impact_frequency(h, radius)))
+                                      min(dt_ref, 0.2 / impact_frequency(h, radius))
+                                      / math.sqrt(sp_f[slot, j, SP_KMUL]))
             d_off = sp_f[slot, j, SP_OFF]
             fn = kc * (pen - d_off) + cc * (pen - max(d0, 0.0)) / h
             sp_f[slot, j, SP_FN] = fn
@@ -793,5 +806,40 @@ def freeze_friction_bounds(n0, nn, e0, ne, n_nodes, n_planes, sp_i, sp_f) -> int
             if (sp_i[slot, j, SP_SRC] >= n_planes and sp_i[slot, j, SP_SET] == ACTIVE
                     and sp_f[slot, j, SP_FROZEN] < 0.0):
                 sp_f[slot, j, SP_FROZEN] = max(sp_f[slot, j, SP_FN], 0.0)
+                count += 1
+    return count
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def stiffen_deep(n0, nn, e0, ne, n_nodes, planes, rd, cols, sp_i, sp_f) -> int:
+    """At a (nearly) converged iterate: stiffen the automatic penalty of each pushing plane
+    whose point is deeper than ``STIFFEN_DEPTH`` of its radius (a segment's point counted with
+    what its nodes' planes carry); returns how many (the caller then iterates on). A user's
+    own stiffness is left alone."""
+    node_radius = rd.n1[N_NODE_RADIUS]
+    n_planes = planes.shape[0]
+    count = 0
+    for k in range(_n_queries(nn, ne, cols)):
+        node, a, b, e, slot, radius = _slot(k, n0, nn, e0, n_nodes, node_radius)
+        for j in range(SP_K):
+            src = sp_i[slot, j, SP_SRC]
+            if src < 0 or sp_i[slot, j, SP_SET] != ACTIVE or sp_f[slot, j, SP_FN] <= 0.0:
+                continue
+            auto = False
+            if src < n_planes:
+                auto = planes[src, PL_AUTO] > 0.0
+            elif cols is not None:
+                auto = cols.par[src - n_planes, P_AUTO] > 0.0
+            if not auto:
+                continue
+            deep = sp_f[slot, j, SP_PEN] - sp_f[slot, j, SP_OFF]
+            if not node:
+                s = sp_f[slot, j, SP_S]
+                deep += (1.0 - s) * _node_pen(sp_i, sp_f, a, src) + s * _node_pen(sp_i, sp_f, b,
+                                                                                   src)
+            kmul = sp_f[slot, j, SP_KMUL]
+            if deep > STIFFEN_DEPTH * radius and kmul < MAX_KMUL:
+                grow = (deep / (IMPACT_DEPTH * radius)) ** 2
+                sp_f[slot, j, SP_KMUL] = min(kmul * max(grow, 2.0), MAX_KMUL)
                 count += 1
     return count
