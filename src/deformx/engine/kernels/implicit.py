@@ -956,36 +956,29 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 converged = early or small
                 # (an unconverged iterate about to be accepted is checked as well)
                 settled = converged or update <= ACCEPT
+                added = 0
                 if settled and n_cols > 0 and refinds < MAX_REFIND:
                     # Segments that cut into a collider between their planes get one there.
-                    added = 0
                     for k in range(K):
                         if near[k] != 0.0:
                             n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
                             added += refind_segments(isl[k], n0, nn, e0, ne, pos, xn, planes,
                                                      rd, cols, rd.sp_i, rd.sp_f)
-                    if added > 0:
-                        refinds += 1
-                        budget = it + max_iter
-                        round_start = it
-                        previous = 0.0
-                        last_update = math.inf
-                        continue
-                if settled and sources and stiffened < MAX_STIFFEN:
+                    refinds += 1 if added > 0 else 0
+                if added == 0 and settled and sources and stiffened < MAX_STIFFEN:
                     # Contacts pressed deeper than their penalty was sized for get stiffer.
-                    added = 0
                     for k in range(K):
                         if near[k] != 0.0:
                             n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
                             added += stiffen_deep(n0, nn, e0, ne, pos.shape[0], planes, rd, cols,
                                                   rd.sp_i, rd.sp_f)
-                    if added > 0:
-                        stiffened += 1
-                        budget = it + max_iter
-                        round_start = it
-                        previous = 0.0
-                        last_update = math.inf
-                        continue
+                    stiffened += 1 if added > 0 else 0
+                if added > 0:  # iterate on with the new planes or stiffnesses
+                    budget = it + max_iter
+                    round_start = it
+                    previous = 0.0
+                    last_update = math.inf
+                    continue
                 break
         if failed == OK and not converged and update > ACCEPT:
             failed = NOT_CONVERGED
