@@ -87,6 +87,27 @@ def test_block_lu_solves_a_nonsymmetric_band_like_dense():
     assert np.allclose(x.ravel(), np.linalg.solve(A, b.ravel()), rtol=1e-11, atol=1e-13)
 
 
+def test_block_solve_columns_with_an_lu_factor_solves_sparse_right_hand_sides_like_dense():
+    # (rod-rod contacts' low-rank columns on a rod whose matrix carries friction coupling)
+    nb, first = 41, 17
+    A, _ = _random_spd_block_band(nb, seed=7)
+    rng = np.random.default_rng(8)
+    for I in range(nb):
+        for J in range(max(0, I - 2), min(nb, I + 3)):
+            A[3 * I:3 * I + 3, 3 * J:3 * J + 3] += 3.0 * rng.normal(size=(3, 3))
+    band = _full_band(A, nb)
+    assert block_lu(band, nb) == 0
+    for ncol in (1, 2, 3):
+        b = np.zeros((3, nb, 3))
+        b[:, first:first + 3] = rng.normal(size=(3, 3, 3))
+        x = b.copy()
+        block_solve_columns(band, nb, x[0], x[min(1, ncol - 1)], x[ncol - 1], ncol, first, True)
+        for j in range(ncol):
+            assert np.allclose(x[j].ravel(), np.linalg.solve(A, b[j].ravel()), rtol=1e-11,
+                               atol=1e-13)
+        assert np.array_equal(x[ncol:], b[ncol:])
+
+
 def test_block_lu_of_a_symmetric_band_matches_cholesky_and_flags_indefinite_pivots():
     nb = 12
     A, sym = _random_spd_block_band(nb, seed=6)

@@ -224,35 +224,6 @@ def block_solve(A, nb, x) -> None:
         n1 = r
 
 
-@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def block_solve_columns(A, nb, x0, x1, x2, ncol, first) -> None:
-    """:func:`block_solve` for ``ncol`` (1-3) right-hand sides at once, each zero before block
-    ``first``. The rows' recurrences are latency bound: three interleaved chains cost little
-    more than one, and the forward pass starts where the right-hand sides do."""
-    z = (0.0, 0.0, 0.0)
-    a2 = a1 = b2 = b1 = c2 = c1 = z
-    for I in range(first, nb):
-        di = _load_lower(A, I)
-        ya = _forward_row(A, I, x0, a2, a1, di)
-        a2, a1 = a1, ya
-        if ncol > 1:
-            yb = _forward_row(A, I, x1, b2, b1, di)
-            b2, b1 = b1, yb
-        if ncol > 2:
-            yc = _forward_row(A, I, x2, c2, c1, di)
-            c2, c1 = c1, yc
-    a2 = a1 = b2 = b1 = c2 = c1 = z
-    for I in range(nb - 1, -1, -1):
-        ra = _backward_row(A, I, nb, x0, a1, a2)
-        a2, a1 = a1, ra
-        if ncol > 1:
-            rb = _backward_row(A, I, nb, x1, b1, b2)
-            b2, b1 = b1, rb
-        if ncol > 2:
-            rc = _backward_row(A, I, nb, x2, c1, c2)
-            c2, c1 = c1, rc
-
-
 # ---------------------------------------------------------------- nonsymmetric band (block LU)
 # A Newton matrix made nonsymmetric by friction (the friction bound mu N follows the normal
 # force, a coupling the symmetric matrix leaves out) is held as the lower blocks above plus the
@@ -347,32 +318,78 @@ def block_lu(A, nb) -> int:
     return 0
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _lu_forward_row(A, I, x, p2, p1):
+    """One forward row of the unit lower solve: y_I (stored in ``x`` and returned)."""
+    y = (x[I, 0], x[I, 1], x[I, 2])
+    if I >= 2:
+        y = _sub_ax(y, _load(A, I, 2), p2)
+    if I >= 1:
+        y = _sub_ax(y, _load(A, I, 1), p1)
+    x[I, 0], x[I, 1], x[I, 2] = y
+    return y
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _lu_backward_row(A, I, nb, x, n1, n2):
+    """One backward row of the upper solve: x_I (stored in ``x`` and returned)."""
+    r = (x[I, 0], x[I, 1], x[I, 2])
+    if I + 1 < nb:
+        r = _sub_ax(r, _load(A, I + 1, LU_UPPER), n1)
+    if I + 2 < nb:
+        r = _sub_ax(r, _load(A, I + 2, LU_UPPER + 1), n2)
+    pinv = _load(A, I, 0)
+    xi = (pinv[0] * r[0] + pinv[1] * r[1] + pinv[2] * r[2],
+          pinv[3] * r[0] + pinv[4] * r[1] + pinv[5] * r[2],
+          pinv[6] * r[0] + pinv[7] * r[1] + pinv[8] * r[2])
+    x[I, 0], x[I, 1], x[I, 2] = xi
+    return xi
+
+
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def block_lu_solve(A, nb, x) -> None:
     """Solve ``L U x = b`` in place (``x`` holds b, shape (nb, 3)) with ``block_lu``'s factor."""
-    p2 = (0.0, 0.0, 0.0)
-    p1 = (0.0, 0.0, 0.0)
+    p2 = p1 = (0.0, 0.0, 0.0)
     for I in range(nb):
-        y = (x[I, 0], x[I, 1], x[I, 2])
-        if I >= 2:
-            y = _sub_ax(y, _load(A, I, 2), p2)
-        if I >= 1:
-            y = _sub_ax(y, _load(A, I, 1), p1)
-        x[I, 0], x[I, 1], x[I, 2] = y
+        y = _lu_forward_row(A, I, x, p2, p1)
         p2 = p1
         p1 = y
-    n1 = (0.0, 0.0, 0.0)  # x_{I+1}
-    n2 = (0.0, 0.0, 0.0)  # x_{I+2}
+    n1 = n2 = (0.0, 0.0, 0.0)  # x_{I+1}, x_{I+2}
     for I in range(nb - 1, -1, -1):
-        r = (x[I, 0], x[I, 1], x[I, 2])
-        if I + 1 < nb:
-            r = _sub_ax(r, _load(A, I + 1, LU_UPPER), n1)
-        if I + 2 < nb:
-            r = _sub_ax(r, _load(A, I + 2, LU_UPPER + 1), n2)
-        pinv = _load(A, I, 0)
-        xi = (pinv[0] * r[0] + pinv[1] * r[1] + pinv[2] * r[2],
-              pinv[3] * r[0] + pinv[4] * r[1] + pinv[5] * r[2],
-              pinv[6] * r[0] + pinv[7] * r[1] + pinv[8] * r[2])
-        x[I, 0], x[I, 1], x[I, 2] = xi
+        xi = _lu_backward_row(A, I, nb, x, n1, n2)
         n2 = n1
         n1 = xi
+
+
+
+# ---------------------------------------------------------------- sparse right-hand sides
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def block_solve_columns(A, nb, x0, x1, x2, ncol, first, lu=False) -> None:
+    """:func:`block_solve` (or, with ``lu``, :func:`block_lu_solve`) for ``ncol`` (1-3)
+    right-hand sides at once, each zero before block ``first``. The rows' recurrences are
+    latency bound: three interleaved chains cost little more than one, and the forward pass
+    starts where the right-hand sides do."""
+    z = (0.0, 0.0, 0.0)
+    a2 = a1 = b2 = b1 = c2 = c1 = z
+    for I in range(first, nb):
+        di = _load_lower(A, I)
+        ya = _lu_forward_row(A, I, x0, a2, a1) if lu else _forward_row(A, I, x0, a2, a1, di)
+        a2, a1 = a1, ya
+        if ncol > 1:
+            yb = _lu_forward_row(A, I, x1, b2, b1) if lu else _forward_row(A, I, x1, b2, b1, di)
+            b2, b1 = b1, yb
+        if ncol > 2:
+            yc = _lu_forward_row(A, I, x2, c2, c1) if lu else _forward_row(A, I, x2, c2, c1, di)
+            c2, c1 = c1, yc
+    a2 = a1 = b2 = b1 = c2 = c1 = z
+    for I in range(nb - 1, -1, -1):
+        ra = _lu_backward_row(A, I, nb, x0, a1, a2) if lu else _backward_row(A, I, nb, x0, a1, a2)
+        a2, a1 = a1, ra
+        if ncol > 1:
+            rb = (_lu_backward_row(A, I, nb, x1, b1, b2) if lu
+                  else _backward_row(A, I, nb, x1, b1, b2))
+            b2, b1 = b1, rb
+        if ncol > 2:
+            rc = (_lu_backward_row(A, I, nb, x2, c1, c2) if lu
+                  else _backward_row(A, I, nb, x2, c1, c2))
+            c2, c1 = c1, rc

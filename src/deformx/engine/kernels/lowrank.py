@@ -11,7 +11,10 @@ friction, along two tangents (its stiffness along and across the slip). By the W
 the coupled system costs one banded solve per column and rod it touches (``Z``, kept while
 the factors are reused; a pair's up to three columns share one pass, which starts at the
 pair's first node) and a dense solve of the columns' matrix: exact, so two rods in
-contact agree on where the other one ends the step however stiff the contact is.
+contact agree on where the other one ends the step however stiff the contact is. A rod whose
+own matrix carries the friction coupling of its collider contacts is factored by block LU
+(nonsymmetric, see ``banded.block_lu``); the identity holds as it is, the columns' matrix is
+then nonsymmetric too and factored by LU rather than Cholesky.
 """
 
 from __future__ import annotations
@@ -47,15 +50,24 @@ def _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, y, ka, kb):
     return v
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _any_lu(lu):
+    for k in range(lu.shape[0]):
+        if lu[k] != 0.0:
+            return True
+    return False
+
+
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed, act, cdir,
-                   ck, csup, Z, S):
+                   ck, csup, Z, S, lu):
     """The active contacts' columns (per pair its normal and, with friction, two tangents:
     pair ``act[c]``, direction ``cdir[c]``, stiffness ``ck[c]``; returns their count), ``Z =
-    D^-1 G`` and the Cholesky factor of ``K^-1 + G^T Z`` into ``S``. ``node_block`` maps a node
-    to its block in the island's system, ``node_rod`` to its rod's slot; ``boff`` the rods'
-    block offsets. ``Z[c]`` is only written (and read) on the blocks of the one or two rods of
-    its pair (slots ``csup[c]``)."""
+    D^-1 G`` and the factor of ``K^-1 + G^T Z`` into ``S``: Cholesky (lower), or, where a
+    rod's factor is block LU (``lu[slot] != 0``), LU (unit lower and upper in one).
+    ``node_block`` maps a node to its block in the island's system, ``node_rod`` to its rod's
+    slot; ``boff`` the rods' block offsets. ``Z[c]`` is only written (and read) on the blocks
+    of the one or two rods of its pair (slots ``csup[c]``)."""
     seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
     nc = 0
     for q in range(m):
@@ -103,16 +115,27 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
                     first = min(first, node_block[nodes[k]] - bo)
             block_solve_columns(A[bo:bo + nb], nb, Z[c, bo:bo + nb],
                                 Z[c + min(1, g - 1), bo:bo + nb], Z[c + g - 1, bo:bo + nb], g,
-                                first)
+                                first, lu[kr] != 0.0)
             if kb == ka:
                 break
         c += g
-    for c in range(nc):  # S = K^-1 + G^T Z (lower triangle), then its Cholesky factor
+    general = _any_lu(lu)
+    for c in range(nc):  # S = K^-1 + G^T Z (lower triangle; all of it when not symmetric)
         nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
-        for e in range(c + 1):
+        for e in range(nc if general else c + 1):
             S[c, e] = _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, Z[e],
                                   csup[e, 0], csup[e, 1])
         S[c, c] += 1.0 / ck[c]
+    if general:  # LU without pivoting: S is near the symmetric positive definite one
+        for e in range(nc):
+            pivot = max(S[e, e], 1e-300)
+            S[e, e] = pivot
+            for c in range(e + 1, nc):
+                f = S[c, e] / pivot
+                S[c, e] = f
+                for j in range(e + 1, nc):
+                    S[c, j] -= f * S[e, j]
+        return nc
     for c in range(nc):
         for e in range(c + 1):
             v = S[c, e]
@@ -127,20 +150,22 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def lowrank_apply(nc, act, cdir, csup, pairs, rd, pp, node_block, node_rod, boff, fixed, Z, S,
-                  u, y) -> None:
-    """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y``."""
+                  u, y, lu) -> None:
+    """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y`` (``S`` as
+    ``lowrank_factor`` left it for the same ``lu``)."""
     seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
-    for c in range(nc):
+    general = _any_lu(lu)
+    for c in range(nc):  # forward: L (unit lower with LU) ...
         nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
         v = _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, y, node_rod[nodes[0]],
                         node_rod[nodes[2]])
         for e in range(c):
             v -= S[c, e] * u[e]
-        u[c] = v / S[c, c]
-    for c in range(nc - 1, -1, -1):
+        u[c] = v if general else v / S[c, c]
+    for c in range(nc - 1, -1, -1):  # ... backward: U, or the Cholesky factor's transpose
         v = u[c]
         for e in range(c + 1, nc):
-            v -= S[e, c] * u[e]
+            v -= (S[c, e] if general else S[e, c]) * u[e]
         u[c] = v / S[c, c]
     for c in range(nc):
         uc = u[c]
