@@ -12,6 +12,55 @@ from .kernels.bundles import GROUPS
 _HEAD = 5  # layout row: offset, then up to four dimensions
 
 
+# A world packs its groups on the first step after any change (a new world: every group):
+# the layouts and carving plans are kept per group and size, which halves that cost.
+_LAYOUTS: dict[tuple, tuple[np.ndarray, int, int]] = {}
+_CARVINGS: dict[tuple, tuple] = {}
+_CACHE_SIZE = 256
+
+
+def _layout(group: str, dims: Mapping[str, int]) -> tuple[np.ndarray, int, int]:
+    """(head of ``I``: count and per array offset and dimensions; float and int buffer sizes)
+    of ``group`` at the sizes ``dims``."""
+    key = (group, tuple(sorted((k, int(v)) for k, v in dims.items())))
+    got = _LAYOUTS.get(key)
+    if got is None:
+        spec = GROUPS[group]
+        header = 1 + _HEAD * len(spec)
+        layout = np.zeros((len(spec), _HEAD), dtype=np.int64)
+        size = {"f": 0, "i": header}
+        for k, (_, kind, shape, _, _) in enumerate(spec):
+            shape = tuple(int(dims[d]) if isinstance(d, str) else d for d in shape)
+            layout[k, 0] = size[kind]
+            layout[k, 1:1 + len(shape)] = shape
+            size[kind] += math.prod(shape)
+        head = np.concatenate(([len(spec)], layout.ravel())).astype(np.int64)
+        if len(_LAYOUTS) >= _CACHE_SIZE:
+            _LAYOUTS.clear()
+        got = _LAYOUTS[key] = (head, size["f"], size["i"])
+    return got
+
+
+def _carving(group: str, I: np.ndarray) -> tuple:
+    """Per array of ``group``: (name, kind, symbols, rows, state rows, offset, shape, size), from
+    the layout at the head of ``I``."""
+    spec = GROUPS[group]
+    head = I[:1 + _HEAD * len(spec)]
+    key = (group, head.tobytes())
+    got = _CARVINGS.get(key)
+    if got is None:
+        layout = head[1:].reshape(len(spec), _HEAD)
+        plan = []
+        for k, (name, kind, sym, rows, n_state) in enumerate(spec):
+            shape = tuple(int(d) for d in layout[k, 1:1 + len(sym)])
+            plan.append((name, kind, sym, rows, n_state, int(layout[k, 0]), shape,
+                         math.prod(shape)))
+        if len(_CARVINGS) >= _CACHE_SIZE:
+            _CARVINGS.clear()
+        got = _CARVINGS[key] = tuple(plan)
+    return got
+
+
 class Packed:
     """One group's float and int buffers, a numpy view per array (``packed.arrays``) and per
     named field (``packed["pos"]``: a row of a stacked array, or a whole array).
@@ -23,37 +72,22 @@ class Packed:
     """
 
     def __init__(self, group: str, dims: Mapping[str, int]) -> None:
-        spec = GROUPS[group]
         self.group = group
-        shapes = [tuple(int(dims[d]) if isinstance(d, str) else d for d in shape)
-                  for _, _, shape, _, _ in spec]
-        header = 1 + _HEAD * len(spec)
-        layout = np.zeros((len(spec), _HEAD), dtype=np.int64)
-        size = {"f": 0, "i": header}
-        for k, ((_, kind, _, _, _), shape) in enumerate(zip(spec, shapes)):
-            layout[k, 0] = size[kind]
-            layout[k, 1:1 + len(shape)] = shape
-            size[kind] += math.prod(shape)
-        self.F = np.zeros(size["f"])
-        self.I = np.zeros(size["i"], dtype=np.int64)
-        self.I[0] = len(spec)
-        self.I[1:header] = layout.ravel()
+        head, n_f, n_i = _layout(group, dims)
+        self.F = np.zeros(n_f)
+        self.I = np.zeros(n_i, dtype=np.int64)
+        self.I[:head.shape[0]] = head
         self._carve()
 
     def _carve(self) -> None:
         """The views of every array and field, from the layout at the head of ``I``."""
-        spec = GROUPS[self.group]
-        layout = self.I[1:1 + _HEAD * len(spec)].reshape(len(spec), _HEAD)
         self.arrays: dict[str, np.ndarray] = {}
         self.fields: dict[str, np.ndarray] = {}
         self.axes: dict[str, str | int] = {}  # a field's first (per-item) dimension
         self._state: list[np.ndarray] = []
         self._state_names: list[str] = []
-        for k, (name, kind, sym, rows, n_state) in enumerate(spec):
-            shape = tuple(int(d) for d in layout[k, 1:1 + len(spec[k][2])])
-            buf = self.F if kind == "f" else self.I
-            o = int(layout[k, 0])
-            arr = buf[o:o + math.prod(shape)].reshape(shape)
+        for name, kind, sym, rows, n_state, o, shape, size in _carving(self.group, self.I):
+            arr = (self.F if kind == "f" else self.I)[o:o + size].reshape(shape)
             self.arrays[name] = arr
             if rows is None:
                 self.fields[name] = arr

@@ -780,11 +780,12 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 # then block LU (rod-rod contacts' low-rank terms then take an LU of their
                 # columns' matrix too). Newton then converges where it crawled at ~0.5 per
                 # iteration (a rope dragged over a kerb: 9.2 -> 6.2 iterations per step; a
-                # pile of eight ropes on the ground: 8.9 -> 7.5).
+                # pile of eight ropes on the ground: 8.9 -> 7.5). Not for a rod alone in contact
+                # with itself: a 0.5 mm steel wire looping on the ground then diverged.
                 # Only near the solution (far from it, at an impact, the coupling's linearisation
                 # misleads more than it helps) and, should that matrix not factor, without it.
                 # (R_COUPLED is this iteration's count: the rod is near, its contacts evaluated)
-                couple = (near[k] != 0.0 and rd.r1[R_COUPLED][r] > 0.0
+                couple = (near[k] != 0.0 and (m == 0 or K > 1) and rd.r1[R_COUPLED][r] > 0.0
                           and update <= COUPLE_NEAR)
                 for attempt in range(3):
                     # On a BDF2 step's first iteration the stress terms (of the predictor,
