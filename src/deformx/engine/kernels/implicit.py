@@ -114,7 +114,7 @@ MAX_STIFFEN = 2  # rounds of contacts stiffened at converged iterates (stiffen_d
 # Anderson acceleration of the linear tails of islands of touching rods: once an update is
 # within ANDERSON_NEAR (elements or rad), shrank by less than ANDERSON_RATE and the contacts
 # stay the same, the update applied mixes the last ANDERSON_DEPTH ones (at most ANDERSON_CAP
-# times as long as Newton's). Not for a rod alone: there it saved 1-2 % of the iterations and
+# times as long as Newton's). Not for a rod alone: there it saved 0-2 % of the iterations and
 # let a rope sliding off a box edge sink 21 % of its radius instead of 5 %.
 ANDERSON_DEPTH, ANDERSON_NEAR, ANDERSON_RATE, ANDERSON_CAP = 2, 0.05, 0.3, 10.0
 _DEBUG = False
