@@ -1087,6 +1087,15 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     return t
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _mixed(hist, q, d, f, c1, c2, n_hist):
+    """Component (q, d) of Anderson's update from the raw one ``f`` and coefficients."""
+    a = f - c1 * (hist[2, q, d] + f - hist[0, q, d])
+    if n_hist > 1:
+        a -= c2 * (hist[3, q, d] + hist[0, q, d] - hist[1, q, d])
+    return a
+
+
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _anderson(K, boff, scale, rhs, hist, n_hist, mix):
     """Anderson acceleration (type II) of the Newton update ``rhs`` (positions weighted by
@@ -1129,10 +1138,7 @@ def _anderson(K, boff, scale, rhs, hist, n_hist, mix):
             for q in range(boff[k], boff[k + 1]):
                 w = w_x if (q - boff[k]) % 2 == 0 else 1.0
                 for d in range(3):
-                    f = rhs[q, d]
-                    a = f - c1 * (hist[2, q, d] + f - hist[0, q, d])
-                    if n_hist > 1:
-                        a -= c2 * (hist[3, q, d] + hist[0, q, d] - hist[1, q, d])
+                    a = _mixed(hist, q, d, rhs[q, d], c1, c2, n_hist)
                     aa += w * a * a
         if aa > ANDERSON_CAP * ANDERSON_CAP * ff:
             c1 = c2 = 0.0
@@ -1140,11 +1146,8 @@ def _anderson(K, boff, scale, rhs, hist, n_hist, mix):
     for q in range(boff[K]):
         for d in range(3):
             f = rhs[q, d]
-            a = f
-            if mixed:  # (the history is uninitialised memory until filled)
-                a -= c1 * (hist[2, q, d] + f - hist[0, q, d])
-                if n_hist > 1:
-                    a -= c2 * (hist[3, q, d] + hist[0, q, d] - hist[1, q, d])
+            # (the history is uninitialised memory until filled: read only when mixing)
+            a = _mixed(hist, q, d, f, c1, c2, n_hist) if mixed else f
             hist[1, q, d] = hist[0, q, d]
             hist[0, q, d] = f
             hist[3, q, d] = hist[2, q, d]
