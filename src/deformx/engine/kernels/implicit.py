@@ -650,8 +650,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             _implied_rates(n0, nn, e0, ne, 1.0 / hb[k], pos, xb, Q, Qb, vel, omega)
         backtracks = 0
         active = 0
-        n_hist = 0  # Anderson's history: valid entries, the iteration and contacts they had
-        hist_it = hist_active = -1
+        n_hist = 0  # valid entries of Anderson's history
         # A calm step (same sub-step, contacts neither switching on nor off) of a rod alone
         # starts from the factor an earlier step left in its rows, as CVODE reuses its Newton
         # matrix over steps: its matrix changes little from step to step, and assembling and
@@ -877,15 +876,15 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             proposed_prev, proposed = proposed, update
             # A linear tail (a contact set that stays, friction's secant, the twist of a rod
             # bent over another) is accelerated by Anderson's mixing of the last updates.
+            # (the history is of consecutive iterates: any other iteration, a backtrack and a
+            # new round or step restart it)
             accelerate = m > 0 and step_scale == 1.0 and update <= ANDERSON_NEAR
-            if (not accelerate or hist_it != it - 1 or active != hist_active
-                    or it - round_start < 2):
+            if not accelerate or active != active_before or it - round_start < 2:
                 n_hist = 0
             if accelerate:
                 _anderson(K, boff, scale, rhs, hist, n_hist,
                           update > tol and update > ANDERSON_RATE * proposed_prev)
                 n_hist = min(n_hist + 1, ANDERSON_DEPTH)
-                hist_it, hist_active = it, active
             update *= step_scale
             # Apply the update: positions add, frames rotate by the material rotation vector;
             # and the implied rates of the new iterate (as _implied_rates), while it is at hand.
