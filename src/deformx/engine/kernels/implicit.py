@@ -323,6 +323,18 @@ def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def _contacts_again(r, ext, h, rd, planes, cols):
+    """``_rod_contacts`` at the same iterate again (after planes were released): their
+    forces are taken out of ``force`` first; returns the contact count."""
+    n0, nn = ext[0], ext[4]
+    force, contact_force = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE]
+    for i in range(n0, n0 + nn):
+        for d in range(3):
+            force[i, d] -= contact_force[i, d]
+    return _rod_contacts(r, ext, h, rd, planes, cols, False, True)
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _add_element_stiffness(A, e0, ne, nn, el_K):
     """Add each element's contact stiffness blocks (node a-a, b-a, b-b) to the Newton matrix."""
     for k in range(ne):
@@ -734,6 +746,26 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 if m > 0:  # after every rod's own contacts: they clear contact_force
                     active += 1000003 * pair_plane_forces(plist, m, pairs, rd, pos, vel, hs,
                                                           min(hs, 1e-4), rr, pp, ps)
+            if (m == 0 and sources and it > 1 and update <= RELEASE_NEAR * tol
+                    and near_rounds < MAX_SET_ROUNDS):
+                # Near convergence, planes that pull at this iterate are let go before its
+                # matrix is made, so the round costs no iteration solved with them still in
+                # (the release below decides on the forces of the iterate before). Not for
+                # rod-rod pairs, whose release stays below.
+                released = 0
+                for k in range(K):
+                    n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+                    released += release_pulling(n0, nn, e0, ne, pos.shape[0], rd.sp_i, rd.sp_f)
+                if released > 0:
+                    near_rounds += 1
+                    active = 0
+                    for k in range(K):
+                        active += _contacts_again(isl[k], _extent(rd, isl[k]), hs, rd, planes,
+                                                  cols)
+                    budget = max(budget, it + max_iter)
+                    round_start = it - 1  # this iteration is the new round's first
+                    previous = 0.0  # forces a fresh factorisation
+                    last_update = math.inf
             for k in range(K):
                 r = isl[k]
                 n0, e0, v0, ne, nn, nv, closed = _extent(rd, r)
