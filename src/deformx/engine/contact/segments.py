@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..geometry.bvh import closest_segment_search, nearest_k_search, signed_side
+from ..geometry.bvh import _box_gap2, closest_segment_search, nearest_k_search, signed_side
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from ..kernels.refcount import NO_REFCOUNT
 from .plane import V_OUT, start_offset
@@ -289,13 +289,6 @@ def _mesh_nearest(c, slot, root, lo, hi, left, right, start, count, order, verts
     return tri, rs, ru, rv, rw, best, fresh
 
 
-@njit(cache=True, inline="always", error_model="numpy")
-def _in_box(lo, hi, node, x) -> bool:
-    """Whether point x lies in BVH node ``node``'s box (bounds included)."""
-    return (lo[node, 0] <= x[0] <= hi[node, 0] and lo[node, 1] <= x[1] <= hi[node, 1]
-            and lo[node, 2] <= x[2] <= hi[node, 2])
-
-
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, Bcount, Border, Fn,
                   En, Vn, Fg, qc_meta, qc_geo, qc_tris, qc_dist, stack, bound, slot, pa, pb,
@@ -319,7 +312,8 @@ def _mesh_closest(c, root, pose, par, MV, MF, Blo, Bhi, Bleft, Bright, Bstart, B
                                                qc_meta, qc_geo, qc_tris, qc_dist, stack,
                                                bound, lasting)
     if (tri < 0 and fresh and par[c, P_TWO_SIDED] == 0.0 and par[c, P_REPULSION] > 0.0
-            and _in_box(Blo, Bhi, root, la) and _in_box(Blo, Bhi, root, lb)):
+            and _box_gap2(Blo, Bhi, root, la, la) == 0.0
+            and _box_gap2(Blo, Bhi, root, lb, lb) == 0.0):
         # Nothing near the surface: the segment may still be inside a closed mesh, less
         # than the repulsion distance deep (checked when the cache is refilled, or on
         # every call while it is inside). Not with an end outside the mesh's box: that end
