@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from deformx.engine.kernels.banded import (LU_UPPER, block_cholesky, block_lu, block_lu_solve,
-                                            block_solve, block_solve_columns, expand_upper)
+                                            block_solve, block_solve_panel, expand_upper)
 
 
 def _random_spd_block_band(nb: int, seed: int):
@@ -37,20 +37,19 @@ def test_block_cholesky_solves_like_dense():
     assert np.allclose(x.ravel(), np.linalg.solve(A, b.ravel()), rtol=1e-12, atol=1e-14)
 
 
-def test_block_solve_columns_solves_sparse_right_hand_sides_like_dense():
+def test_block_solve_panel_solves_sparse_right_hand_sides_like_dense():
     nb, first = 41, 17
     A, band = _random_spd_block_band(nb, seed=5)
     assert block_cholesky(band, nb) == 0
     rng = np.random.default_rng(6)
-    for ncol in (1, 2, 3):
-        b = np.zeros((3, nb, 3))
-        b[:, first:first + 3] = rng.normal(size=(3, 3, 3))  # zero before block `first`
+    for p in (1, 3, 14):
+        b = np.zeros((nb, 3, p + 2))
+        b[first:first + 3, :, :p] = rng.normal(size=(3, 3, p))  # zero before block `first`
         x = b.copy()
-        block_solve_columns(band, nb, x[0], x[min(1, ncol - 1)], x[ncol - 1], ncol, first)
-        for j in range(ncol):
-            assert np.allclose(x[j].ravel(), np.linalg.solve(A, b[j].ravel()), rtol=1e-12,
-                               atol=1e-14)
-        assert np.array_equal(x[ncol:], b[ncol:])  # the columns past ncol are left alone
+        block_solve_panel(band, nb, x, p, first)
+        dense = np.linalg.solve(A, b[:, :, :p].reshape(3 * nb, p))
+        assert np.allclose(x[:, :, :p].reshape(3 * nb, p), dense, rtol=1e-12, atol=1e-14)
+        assert np.array_equal(x[:, :, p:], b[:, :, p:])  # the columns past p are left alone
 
 
 def test_block_cholesky_reports_an_indefinite_pivot():
@@ -87,7 +86,7 @@ def test_block_lu_solves_a_nonsymmetric_band_like_dense():
     assert np.allclose(x.ravel(), np.linalg.solve(A, b.ravel()), rtol=1e-11, atol=1e-13)
 
 
-def test_block_solve_columns_with_an_lu_factor_solves_sparse_right_hand_sides_like_dense():
+def test_block_solve_panel_with_an_lu_factor_solves_sparse_right_hand_sides_like_dense():
     # (rod-rod contacts' low-rank columns on a rod whose matrix carries friction coupling)
     nb, first = 41, 17
     A, _ = _random_spd_block_band(nb, seed=7)
@@ -97,15 +96,13 @@ def test_block_solve_columns_with_an_lu_factor_solves_sparse_right_hand_sides_li
             A[3 * I:3 * I + 3, 3 * J:3 * J + 3] += 3.0 * rng.normal(size=(3, 3))
     band = _full_band(A, nb)
     assert block_lu(band, nb) == 0
-    for ncol in (1, 2, 3):
-        b = np.zeros((3, nb, 3))
-        b[:, first:first + 3] = rng.normal(size=(3, 3, 3))
+    for p in (1, 3, 14):
+        b = np.zeros((nb, 3, p))
+        b[first:first + 3] = rng.normal(size=(3, 3, p))
         x = b.copy()
-        block_solve_columns(band, nb, x[0], x[min(1, ncol - 1)], x[ncol - 1], ncol, first, True)
-        for j in range(ncol):
-            assert np.allclose(x[j].ravel(), np.linalg.solve(A, b[j].ravel()), rtol=1e-11,
-                               atol=1e-13)
-        assert np.array_equal(x[ncol:], b[ncol:])
+        block_solve_panel(band, nb, x, p, first, True)
+        dense = np.linalg.solve(A, b.reshape(3 * nb, p))
+        assert np.allclose(x.reshape(3 * nb, p), dense, rtol=1e-11, atol=1e-13)
 
 
 def test_block_lu_of_a_symmetric_band_matches_cholesky_and_flags_indefinite_pivots():

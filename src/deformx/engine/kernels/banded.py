@@ -362,34 +362,54 @@ def block_lu_solve(A, nb, x) -> None:
 
 
 
-# ---------------------------------------------------------------- sparse right-hand sides
+# ---------------------------------------------------------------- panels of right-hand sides
+@njit(cache=True, inline="always", error_model="numpy")
+def _panel_sub(P, I, J, m, transpose, p) -> None:
+    """P[I] -= m @ P[J] (or m^T @ P[J]) for the ``p`` columns of the (nb, 3, p) panel ``P``."""
+    if transpose:
+        m = (m[0], m[3], m[6], m[1], m[4], m[7], m[2], m[5], m[8])
+    for j in range(p):
+        x0, x1, x2 = P[J, 0, j], P[J, 1, j], P[J, 2, j]
+        P[I, 0, j] -= m[0] * x0 + m[1] * x1 + m[2] * x2
+        P[I, 1, j] -= m[3] * x0 + m[4] * x1 + m[5] * x2
+        P[I, 2, j] -= m[6] * x0 + m[7] * x1 + m[8] * x2
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _panel_mul(P, I, m, p) -> None:
+    """P[I] <- m @ P[I] (``m`` row-major)."""
+    for j in range(p):
+        x0, x1, x2 = P[I, 0, j], P[I, 1, j], P[I, 2, j]
+        P[I, 0, j] = m[0] * x0 + m[1] * x1 + m[2] * x2
+        P[I, 1, j] = m[3] * x0 + m[4] * x1 + m[5] * x2
+        P[I, 2, j] = m[6] * x0 + m[7] * x1 + m[8] * x2
+
+
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def block_solve_columns(A, nb, x0, x1, x2, ncol, first, lu=False) -> None:
-    """:func:`block_solve` (or, with ``lu``, :func:`block_lu_solve`) for ``ncol`` (1-3)
-    right-hand sides at once, each zero before block ``first``. The rows' recurrences are
-    latency bound: three interleaved chains cost little more than one, and the forward pass
-    starts where the right-hand sides do."""
-    z = (0.0, 0.0, 0.0)
-    a2 = a1 = b2 = b1 = c2 = c1 = z
+def block_solve_panel(A, nb, P, p, first, lu=False) -> None:
+    """:func:`block_solve` (or, with ``lu``, :func:`block_lu_solve`) for the ``p`` right-hand
+    sides of the panel ``P`` (shape (nb, 3, >= p): block row, component, column), all zero
+    before block ``first``. Each row's work runs along the columns, which vectorises: per
+    right-hand side ~3x cheaper than one recurrence at a time (a pile's rod-rod columns)."""
+    # Forward (unit lower L, both factors): y_I = b_I - L[I, I-2] y_{I-2} - L[I, I-1] y_{I-1}.
     for I in range(first, nb):
-        di = _load_lower(A, I)
-        ya = _lu_forward_row(A, I, x0, a2, a1) if lu else _forward_row(A, I, x0, a2, a1, di)
-        a2, a1 = a1, ya
-        if ncol > 1:
-            yb = _lu_forward_row(A, I, x1, b2, b1) if lu else _forward_row(A, I, x1, b2, b1, di)
-            b2, b1 = b1, yb
-        if ncol > 2:
-            yc = _lu_forward_row(A, I, x2, c2, c1) if lu else _forward_row(A, I, x2, c2, c1, di)
-            c2, c1 = c1, yc
-    a2 = a1 = b2 = b1 = c2 = c1 = z
+        if I - 2 >= first:
+            _panel_sub(P, I, I - 2, _load(A, I, 2), False, p)
+        if I - 1 >= first:
+            _panel_sub(P, I, I - 1, _load(A, I, 1), False, p)
+    # Backward: Cholesky x_I = D_I^-1 y_I - L[I+1, I]^T x_{I+1} - L[I+2, I]^T x_{I+2};
+    # LU x_I = U_II^-1 (y_I - U[I, I+1] x_{I+1} - U[I, I+2] x_{I+2}).
     for I in range(nb - 1, -1, -1):
-        ra = _lu_backward_row(A, I, nb, x0, a1, a2) if lu else _backward_row(A, I, nb, x0, a1, a2)
-        a2, a1 = a1, ra
-        if ncol > 1:
-            rb = (_lu_backward_row(A, I, nb, x1, b1, b2) if lu
-                  else _backward_row(A, I, nb, x1, b1, b2))
-            b2, b1 = b1, rb
-        if ncol > 2:
-            rc = (_lu_backward_row(A, I, nb, x2, c1, c2) if lu
-                  else _backward_row(A, I, nb, x2, c1, c2))
-            c2, c1 = c1, rc
+        if lu:
+            if I + 1 < nb:
+                _panel_sub(P, I, I + 1, _load(A, I + 1, LU_UPPER), False, p)
+            if I + 2 < nb:
+                _panel_sub(P, I, I + 2, _load(A, I + 2, LU_UPPER + 1), False, p)
+            _panel_mul(P, I, _load(A, I, 0), p)
+        else:
+            d = _load_lower(A, I)
+            _panel_mul(P, I, (d[0], d[1], d[3], d[1], d[2], d[4], d[3], d[4], d[5]), p)
+            if I + 1 < nb:
+                _panel_sub(P, I, I + 1, _load(A, I + 1, 1), True, p)
+            if I + 2 < nb:
+                _panel_sub(P, I, I + 2, _load(A, I + 2, 2), True, p)

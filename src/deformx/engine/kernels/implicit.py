@@ -418,8 +418,8 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     # time they are made or passed (~4 us per call in all). Offsets, then contact-plane and
     # rod-rod scratch.
     nc = 3 * m  # per pair a normal column and, with friction, two tangent ones
-    ints = np.zeros(3 * (K + 1) + SP_K + 2 * n_nodes + 3 * nc, dtype=np.int64)
-    floats = np.zeros(8 * K + 12 * SP_K + 5 * nc)
+    ints = np.zeros(3 * (K + 1) + SP_K + 2 * n_nodes + 5 * nc + 2 * (K + 1), dtype=np.int64)
+    floats = np.zeros(8 * K + 12 * SP_K + 6 * nc)
     # The island's system stacks its rods' block rows; per rod its offsets in the stack.
     boff, noff, eoff = (borrow(ints, 0, (K + 1,)), borrow(ints, K + 1, (K + 1,)),
                         borrow(ints, 2 * K + 2, (K + 1,)))
@@ -455,19 +455,25 @@ def advance_island_implicit(isl, n_steps, t, sim, opts, rd, env, cols, pc):
     keep = (borrow(ints, o, (SP_K,)), borrow(floats, f, (SP_K,)),
             borrow(floats, f + SP_K, (SP_K, 8)), borrow(floats, f + 9 * SP_K, (SP_K, 3)))
     # Rod-rod contacts: each node's block in the stack and rod slot, the low-rank terms.
-    # Z and S are written before they are read (each column zeroes the blocks it spans, see
-    # lowrank_factor): not zeroing them saves clearing megabytes per step in a pile.
+    # Z and S are written before they are read (lowrank_factor zeroes each rod's panel of
+    # columns and the columns' matrix it uses): not zeroing them all saves clearing megabytes
+    # per step in a pile.
     o, f = o + SP_K, f + 12 * SP_K
     # (no pairs: empty views of ``floats``, no allocation)
     big = np.empty(nc * nbt * 3 + nc * nc + 12 * nbt) if m > 0 else floats
-    Z, S = borrow(big, 0, (nc, nbt if m > 0 else 0, 3)), borrow(big, nc * nbt * 3, (nc, nc))
+    Z, S = borrow(big, 0, (nc * nbt * 3,)), borrow(big, nc * nbt * 3, (nc * nc,))
     # Anderson's history (islands only): the last two raw updates and the last two applied.
     hist = borrow(big, nc * nbt * 3 + nc * nc, (4, nbt if m > 0 else 0, 3))
     o2 = o + 2 * n_nodes
+    # Per rod slot its columns (offsets into a list of them) and its panel's offset in Z;
+    # a row of scratch.
+    o3 = o2 + 3 * nc
+    panels = (borrow(ints, o3, (K + 1,)), borrow(ints, o3 + K + 1, (2 * nc,)),
+              borrow(ints, o3 + 2 * nc + K + 1, (K + 1,)), borrow(floats, f + 5 * nc, (nc,)))
     lowrank = (borrow(ints, o, (n_nodes,)), borrow(ints, o + n_nodes, (n_nodes,)), Z, S,
                borrow(ints, o2, (nc,)), borrow(floats, f, (nc, 3)),
                borrow(floats, f + 3 * nc, (nc,)), borrow(ints, o2 + nc, (nc, 2)),
-               borrow(floats, f + 4 * nc, (nc,)))
+               borrow(floats, f + 4 * nc, (nc,)), panels)
     t = _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc,
                         (offs, per_rod, system, keep, lowrank, hist))
     # The borrowed views' owners live until here.
@@ -483,7 +489,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     (boff, noff, eoff), (scale, last_hs, upd, prev_upd, near, calm, hb, lu) = offs, per_rod
     A, rhs, fixed, acc, alpha = system
     keep_src, keep_f, keep_n, x_start = keep
-    node_block, node_rod, Z, S, act, cdir, ck, csup, u = lowrank
+    node_block, node_rod, Z, S, act, cdir, ck, csup, u, panels = lowrank
     m = plist.shape[0]
     dt = sim[SIM_DT]
     gravity = sim[SIM_G:SIM_G + 3]
@@ -871,7 +877,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 break
             if refactor and m > 0:
                 n_act = lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A,
-                                       fixed, act, cdir, ck, csup, Z, S, lu)
+                                       fixed, act, cdir, ck, csup, Z, S, lu, panels)
             for k in range(K):
                 bo, nb = boff[k], boff[k + 1] - boff[k]
                 if lu[k] != 0.0:
@@ -880,7 +886,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     block_solve(A[bo:bo + nb], nb, rhs[bo:bo + nb])
             if n_act > 0:
                 lowrank_apply(n_act, act, cdir, csup, pairs, rd, pp, node_block, node_rod, boff,
-                              fixed, Z, S, u, rhs, lu)
+                              fixed, Z, S, u, rhs, lu, panels)
             # Update size relative to each rod's element length; the island's is the largest.
             update = 0.0
             for k in range(K):

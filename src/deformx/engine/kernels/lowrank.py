@@ -9,23 +9,23 @@ friction, along two tangents (its stiffness along and across the slip). By the W
     (D + G K G^T)^-1 b = y - Z (K^-1 + G^T Z)^-1 G^T y,    y = D^-1 b,   Z = D^-1 G,
 
 the coupled system costs one banded solve per column and rod it touches (``Z``, kept while
-the factors are reused; a pair's up to three columns share one pass, which starts at the
-pair's first node) and a dense solve of the columns' matrix: exact, so two rods in
-contact agree on where the other one ends the step however stiff the contact is. A rod whose
-own matrix carries the friction coupling of its collider contacts is factored by block LU
-(nonsymmetric, see ``banded.block_lu``); the identity holds as it is, the columns' matrix is
-then nonsymmetric too and factored by LU rather than Cholesky.
+the factors are reused) and a dense solve of the columns' matrix: exact, so two rods in
+contact agree on where the other one ends the step however stiff the contact is. Each rod's
+columns are solved together as one panel (``banded.block_solve_panel``, from the first block
+any of them reaches), and the columns' matrix is eliminated in place without pivoting,
+skipping the rows of columns on rods of their own (a pile: about half its entries are zero).
+A rod whose own matrix carries the friction coupling of its collider contacts is factored by
+block LU (nonsymmetric, see ``banded.block_lu``); the identity holds as it is, and the
+columns' matrix is then nonsymmetric too: eliminated whole rather than its upper half.
 """
 
 from __future__ import annotations
 
-import math
-
 from numba import njit
 
 from ..contact.pairplanes import PP_KA, PP_KB, PP_KN, PP_N, PP_S, PP_SH, PP_T
-from .banded import block_solve_columns
-from .bundles import E_SEG_A, E_SEG_B
+from .banded import block_solve_panel
+from .bundles import E_SEG_A, E_SEG_B, borrow
 from .refcount import NO_REFCOUNT
 
 
@@ -60,15 +60,18 @@ def _any_lu(lu):
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed, act, cdir,
-                   ck, csup, Z, S, lu):
+                   ck, csup, Z, S, lu, panels):
     """The active contacts' columns (per pair its normal and, with friction, two tangents:
     pair ``act[c]``, direction ``cdir[c]``, stiffness ``ck[c]``; returns their count), ``Z =
     D^-1 G`` and the factor of ``K^-1 + G^T Z`` into ``S``: Cholesky (lower), or, where a
     rod's factor is block LU (``lu[slot] != 0``), LU (unit lower and upper in one).
     ``node_block`` maps a node to its block in the island's system, ``node_rod`` to its rod's
-    slot; ``boff`` the rods' block offsets. ``Z[c]`` is only written (and read) on the blocks
-    of the one or two rods of its pair (slots ``csup[c]``)."""
+    slot; ``boff`` the rods' block offsets. ``Z`` (flat) holds per rod slot ``k`` a panel
+    (its blocks, 3, its columns) from ``zoff[k]``: the columns of the pairs that touch it,
+    listed in ``cols[coff[k]:coff[k + 1]]`` (``panels`` = coff, cols, zoff, row)."""
+    coff, cols, zoff, row = panels
     seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
+    K = boff.shape[0] - 1
     nc = 0
     for q in range(m):
         p = plist[q]
@@ -82,96 +85,121 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
                 act[nc] = p
                 cdir[nc, 0], cdir[nc, 1], cdir[nc, 2] = dirn
                 ck[nc] = k
+                nodes, w = _corners(p, pairs, seg_a, seg_b, pp)
+                csup[nc, 0] = node_rod[nodes[0]]
+                csup[nc, 1] = node_rod[nodes[2]]
                 nc += 1
-    c = 0
-    while c < nc:  # a pair's columns (consecutive) share their nodes: solved together
-        p = act[c]
-        g = 1
-        while g < 3 and c + g < nc and act[c + g] == p:
-            g += 1
-        nodes, w = _corners(p, pairs, seg_a, seg_b, pp)
-        ka = node_rod[nodes[0]]
-        kb = node_rod[nodes[2]]
-        for j in range(c, c + g):
-            csup[j, 0] = ka
-            csup[j, 1] = kb
-            for kr in (ka, kb):
-                for b in range(boff[kr], boff[kr + 1]):
-                    Z[j, b, 0] = 0.0
-                    Z[j, b, 1] = 0.0
-                    Z[j, b, 2] = 0.0
-                if kb == ka:  # a self-contact: one rod
-                    break
-            for k in range(4):
-                blk = node_block[nodes[k]]
-                if not fixed[blk]:
-                    for d in range(3):
-                        Z[j, blk, d] += w[k] * cdir[j, d]
-        for kr in (ka, kb):
-            bo, nb = boff[kr], boff[kr + 1] - boff[kr]
-            first = nb
-            for k in range(4):
-                if node_rod[nodes[k]] == kr:
-                    first = min(first, node_block[nodes[k]] - bo)
-            block_solve_columns(A[bo:bo + nb], nb, Z[c, bo:bo + nb],
-                                Z[c + min(1, g - 1), bo:bo + nb], Z[c + g - 1, bo:bo + nb], g,
-                                first, lu[kr] != 0.0)
-            if kb == ka:
-                break
-        c += g
-    general = _any_lu(lu)
-    for c in range(nc):  # S = K^-1 + G^T Z (lower triangle; all of it when not symmetric)
-        nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
-        for e in range(nc if general else c + 1):
-            S[c, e] = _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, Z[e],
-                                  csup[e, 0], csup[e, 1])
-        S[c, c] += 1.0 / ck[c]
-    if general:  # LU without pivoting: S is near the symmetric positive definite one
-        for e in range(nc):
-            pivot = max(S[e, e], 1e-300)
-            S[e, e] = pivot
-            for c in range(e + 1, nc):
-                f = S[c, e] / pivot
-                S[c, e] = f
-                for j in range(e + 1, nc):
-                    S[c, j] -= f * S[e, j]
-        return nc
+    S = borrow(S, 0, (nc, nc))  # compact: the flat buffer holds up to (3 m)^2
+    # Each rod's columns, in column order (a self-contact's once).
+    for k in range(K + 1):
+        coff[k] = 0
     for c in range(nc):
-        for e in range(c + 1):
-            v = S[c, e]
-            for k in range(e):
-                v -= S[c, k] * S[e, k]
-            if c == e:
-                S[c, c] = math.sqrt(max(v, 1e-300))
-            else:
-                S[c, e] = v / S[e, e]
+        coff[csup[c, 0] + 1] += 1
+        if csup[c, 1] != csup[c, 0]:
+            coff[csup[c, 1] + 1] += 1
+    for k in range(K):
+        coff[k + 1] += coff[k]
+        zoff[k + 1] = zoff[k] + 3 * (boff[k + 1] - boff[k]) * (coff[k + 1] - coff[k])
+    for c in range(nc):  # (coff[k] as rod k's cursor, then shifted back)
+        for j in range(1 if csup[c, 0] == csup[c, 1] else 2):
+            cols[coff[csup[c, j]]] = c
+            coff[csup[c, j]] += 1
+    for k in range(K, 0, -1):
+        coff[k] = coff[k - 1]
+    coff[0] = 0
+    # Z = D^-1 G, rod by rod: its columns' nonzeros at the nodes of their segments, one
+    # panel solve from the first of them.
+    for k in range(K):
+        pk = coff[k + 1] - coff[k]
+        if pk == 0:
+            continue
+        bo, nb = boff[k], boff[k + 1] - boff[k]
+        P = borrow(Z, zoff[k], (nb, 3, pk))
+        P[:] = 0.0
+        first = nb
+        for j in range(pk):
+            c = cols[coff[k] + j]
+            nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
+            for q in range(4):
+                blk = node_block[nodes[q]]
+                if node_rod[nodes[q]] == k and not fixed[blk]:
+                    first = min(first, blk - bo)
+                    for d in range(3):
+                        P[blk - bo, d, j] += w[q] * cdir[c, d]
+        block_solve_panel(A[bo:bo + nb], nb, P, pk, first, lu[k] != 0.0)
+    # S = K^-1 + G^T Z: column c's nodes against the panels of its rods.
+    for c in range(nc):
+        for e in range(nc):
+            S[c, e] = 0.0
+    for k in range(K):
+        pk = coff[k + 1] - coff[k]
+        if pk == 0:
+            continue
+        bo, nb = boff[k], boff[k + 1] - boff[k]
+        P = borrow(Z, zoff[k], (nb, 3, pk))
+        for i in range(pk):
+            c = cols[coff[k] + i]
+            nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
+            for j in range(pk):
+                row[j] = 0.0
+            for q in range(4):
+                blk = node_block[nodes[q]]
+                if node_rod[nodes[q]] == k and not fixed[blk]:
+                    g0, g1, g2 = w[q] * cdir[c, 0], w[q] * cdir[c, 1], w[q] * cdir[c, 2]
+                    b = blk - bo
+                    for j in range(pk):
+                        row[j] += g0 * P[b, 0, j] + g1 * P[b, 1, j] + g2 * P[b, 2, j]
+            for j in range(pk):
+                S[c, cols[coff[k] + j]] += row[j]
+    for c in range(nc):
+        S[c, c] += 1.0 / ck[c]
+    # LU without pivoting (S is near, or is, symmetric positive definite): unit lower L below
+    # the diagonal, U on and above it. Symmetric: only U's rows are eliminated (L[c, e] =
+    # U[e, c] / U[e, e]). Rows whose entry is zero (columns on rods of their own) are skipped.
+    general = _any_lu(lu)
+    for e in range(nc):
+        pivot = max(S[e, e], 1e-300)
+        S[e, e] = pivot
+        for c in range(e + 1, nc):
+            f = (S[c, e] if general else S[e, c]) / pivot
+            S[c, e] = f
+            if f != 0.0:
+                for j in range(e + 1 if general else c, nc):
+                    S[c, j] -= f * S[e, j]
     return nc
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def lowrank_apply(nc, act, cdir, csup, pairs, rd, pp, node_block, node_rod, boff, fixed, Z, S,
-                  u, y, lu) -> None:
-    """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y`` (``S`` as
-    ``lowrank_factor`` left it for the same ``lu``)."""
+                  u, y, lu, panels) -> None:
+    """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y`` (``S``,
+    ``Z`` and ``panels`` as ``lowrank_factor`` left them for the same ``lu``)."""
+    coff, cols, zoff, row = panels
     seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
-    general = _any_lu(lu)
-    for c in range(nc):  # forward: L (unit lower with LU) ...
+    S = borrow(S, 0, (nc, nc))
+    for c in range(nc):  # forward: L (unit lower) ...
         nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
-        v = _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, y, node_rod[nodes[0]],
-                        node_rod[nodes[2]])
+        v = _dot_column(nodes, w, c, cdir, node_block, node_rod, fixed, y, csup[c, 0],
+                        csup[c, 1])
         for e in range(c):
             v -= S[c, e] * u[e]
-        u[c] = v if general else v / S[c, c]
-    for c in range(nc - 1, -1, -1):  # ... backward: U, or the Cholesky factor's transpose
+        u[c] = v
+    for c in range(nc - 1, -1, -1):  # ... backward: U
         v = u[c]
         for e in range(c + 1, nc):
-            v -= (S[c, e] if general else S[e, c]) * u[e]
+            v -= S[c, e] * u[e]
         u[c] = v / S[c, c]
-    for c in range(nc):
-        uc = u[c]
-        for j in range(1 if csup[c, 0] == csup[c, 1] else 2):  # a self-contact: one rod
-            kr = csup[c, j]
-            for b in range(boff[kr], boff[kr + 1]):
-                y[b, 0] -= uc * Z[c, b, 0]
-                y[b, 1] -= uc * Z[c, b, 1]
-                y[b, 2] -= uc * Z[c, b, 2]
+    for k in range(boff.shape[0] - 1):
+        pk = coff[k + 1] - coff[k]
+        if pk == 0:
+            continue
+        bo, nb = boff[k], boff[k + 1] - boff[k]
+        P = borrow(Z, zoff[k], (nb, 3, pk))
+        for j in range(pk):
+            row[j] = u[cols[coff[k] + j]]
+        for b in range(nb):
+            for d in range(3):
+                v = 0.0
+                for j in range(pk):
+                    v += P[b, d, j] * row[j]
+                y[bo + b, d] -= v
