@@ -42,7 +42,8 @@ from .cosserat import rod_extent, rod_internal_loads
 from .so3 import relative_rotation_vector, rotate_directors
 from .bundles import (
     borrow,
-    E_DIL, E_J, E_OMEGA, E_PAIR_OFF, E_Q, E_QE, E_QH, E_QN, E_REST_LEN, E_S, E_STRESS, E_TEXT,
+    E_DIL, E_J, E_OMEGA, E_PAIR_OFF, E_Q, E_QE, E_QH, E_QN, E_REST_LEN, E_S, E_SEG_A, E_SEG_B,
+    E_STRESS, E_TEXT,
     E_TN_EL, E_ALPHA, E_TORQUE, E_WE, E_WH, E_WN, N_ACC, N_CONTACT_FORCE,
     N_FEXT, N_FN_EL, N_FORCE, N_MASS, N_POS, N_VE, N_VEL, N_VH, N_VN, N_XE, N_XH, N_XN, N_XP,
     OPT_ITER, R_CLOSED, R_CONTACTS, R_COUPLED, R_ELEM0, R_FACT_AGE, R_FACT_H, R_FIRST_UPD,
@@ -490,6 +491,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
     A, rhs, fixed, acc, alpha = system
     keep_src, keep_f, keep_n, x_start = keep
     node_block, node_rod, Z, S, act, cdir, ck, csup, u, panels = lowrank
+    seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
     m = plist.shape[0]
     dt = sim[SIM_DT]
     gravity = sim[SIM_G:SIM_G + 3]
@@ -876,8 +878,8 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 fail_at = (bad - 1) // 2
                 break
             if refactor and m > 0:
-                n_act = lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A,
-                                       fixed, act, cdir, ck, csup, Z, S, lu, panels)
+                n_act = lowrank_factor(plist, m, pairs, seg_a, seg_b, pp, node_block, node_rod,
+                                       boff, A, fixed, act, cdir, ck, csup, Z, S, lu, panels)
             for k in range(K):
                 bo, nb = boff[k], boff[k + 1] - boff[k]
                 if lu[k] != 0.0:
@@ -885,8 +887,8 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 else:
                     block_solve(A[bo:bo + nb], nb, rhs[bo:bo + nb])
             if n_act > 0:
-                lowrank_apply(n_act, act, cdir, csup, pairs, rd, pp, node_block, node_rod, boff,
-                              fixed, Z, S, u, rhs, lu, panels)
+                lowrank_apply(n_act, act, cdir, csup, pairs, seg_a, seg_b, pp, node_block,
+                              node_rod, boff, fixed, Z, S, u, rhs, lu, panels)
             # Update size relative to each rod's element length; the island's is the largest.
             update = 0.0
             for k in range(K):

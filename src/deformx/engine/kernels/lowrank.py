@@ -25,7 +25,7 @@ from numba import njit
 
 from ..contact.pairplanes import PP_KA, PP_KB, PP_KN, PP_N, PP_S, PP_SH, PP_T
 from .banded import block_solve_panel
-from .bundles import E_SEG_A, E_SEG_B, borrow
+from .bundles import borrow
 from .refcount import NO_REFCOUNT
 
 
@@ -59,8 +59,8 @@ def _any_lu(lu):
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed, act, cdir,
-                   ck, csup, Z, S, lu, panels):
+def lowrank_factor(plist, m, pairs, seg_a, seg_b, pp, node_block, node_rod, boff, A, fixed,
+                   act, cdir, ck, csup, Z, S, lu, panels):
     """The active contacts' columns (per pair its normal and, with friction, two tangents:
     pair ``act[c]``, direction ``cdir[c]``, stiffness ``ck[c]``; returns their count), ``Z =
     D^-1 G`` and the factor of ``K^-1 + G^T Z`` into ``S``: Cholesky (lower), or, where a
@@ -70,7 +70,6 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
     (its blocks, 3, its columns) from ``zoff[k]``: the columns of the pairs that touch it,
     listed in ``cols[coff[k]:coff[k + 1]]`` (``panels`` = coff, cols, zoff, row)."""
     coff, cols, zoff, row = panels
-    seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
     K = boff.shape[0] - 1
     nc = 0
     for q in range(m):
@@ -170,12 +169,11 @@ def lowrank_factor(plist, m, pairs, rd, pp, node_block, node_rod, boff, A, fixed
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def lowrank_apply(nc, act, cdir, csup, pairs, rd, pp, node_block, node_rod, boff, fixed, Z, S,
-                  u, y, lu, panels) -> None:
+def lowrank_apply(nc, act, cdir, csup, pairs, seg_a, seg_b, pp, node_block, node_rod, boff,
+                  fixed, Z, S, u, y, lu, panels) -> None:
     """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y`` (``S``,
     ``Z`` and ``panels`` as ``lowrank_factor`` left them for the same ``lu``)."""
     coff, cols, zoff, row = panels
-    seg_a, seg_b = rd.ei[E_SEG_A], rd.ei[E_SEG_B]
     S = borrow(S, 0, (nc, nc))
     for c in range(nc):  # forward: L (unit lower) ...
         nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
