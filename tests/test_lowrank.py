@@ -12,6 +12,8 @@ from deformx.engine.kernels.banded import (LU_UPPER, block_cholesky, block_lu, b
                                             block_solve)
 from deformx.engine.kernels.lowrank import lowrank_apply, lowrank_factor
 
+from .test_block_cholesky import _full_band
+
 N_ELEMENTS = 6  # per rod: 7 node blocks and 6 element blocks, interleaved
 
 
@@ -26,14 +28,7 @@ def _band(rng, nb, symmetric):
     if symmetric:
         A = A + A.T
     A += 30.0 * np.eye(n)
-    band = np.zeros((nb, 5, 3, 3))
-    for I in range(nb):
-        band[I, 0] = A[3 * I:3 * I + 3, 3 * I:3 * I + 3]
-        for d in (1, 2):
-            if I - d >= 0:
-                band[I, d] = A[3 * I:3 * I + 3, 3 * (I - d):3 * (I - d) + 3]
-                band[I, LU_UPPER + d - 1] = A[3 * (I - d):3 * (I - d) + 3, 3 * I:3 * I + 3]
-    return A, band
+    return A, _full_band(A, nb)
 
 
 def _unit(v):

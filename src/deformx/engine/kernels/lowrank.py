@@ -107,7 +107,11 @@ def lowrank_factor(plist, m, pairs, seg_a, seg_b, pp, node_block, node_rod, boff
         coff[k] = coff[k - 1]
     coff[0] = 0
     # Z = D^-1 G, rod by rod: its columns' nonzeros at the nodes of their segments, one
-    # panel solve from the first of them.
+    # panel solve from the first of them; then S = K^-1 + G^T Z, each column's nodes on the
+    # rod against the rod's panel.
+    for c in range(nc):
+        for e in range(nc):
+            S[c, e] = 0.0
     for k in range(K):
         pk = coff[k + 1] - coff[k]
         if pk == 0:
@@ -126,16 +130,6 @@ def lowrank_factor(plist, m, pairs, seg_a, seg_b, pp, node_block, node_rod, boff
                     for d in range(3):
                         P[blk - bo, d, j] += w[q] * cdir[c, d]
         block_solve_panel(A[bo:bo + nb], nb, P, pk, first, lu[k] != 0.0)
-    # S = K^-1 + G^T Z: column c's nodes against the panels of its rods.
-    for c in range(nc):
-        for e in range(nc):
-            S[c, e] = 0.0
-    for k in range(K):
-        pk = coff[k + 1] - coff[k]
-        if pk == 0:
-            continue
-        bo, nb = boff[k], boff[k + 1] - boff[k]
-        P = borrow(Z, zoff[k], (nb, 3, pk))
         for i in range(pk):
             c = cols[coff[k] + i]
             nodes, w = _corners(act[c], pairs, seg_a, seg_b, pp)
