@@ -64,7 +64,9 @@ def _travel(X, Xp, a):
                      + (Xp[a, 2] - X[a, 2]) ** 2)
 
 
-@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+# (inlined, as pair_plane: a call that passes the rod bundle costs ~1,000 cycles, more than
+# the work, and these run once per candidate pair and step)
+@njit(cache=True, inline="always", error_model="numpy")
 def _law(rd, a, b, c, d, s, t, dt_ref, rr):
     """Penalty stiffness (N/m) and damping (N s/m) of a contact at s on segment ab, t on cd."""
     mass, node_kmin = rd.n1[N_MASS], rd.n1[N_NODE_KMIN]
@@ -75,7 +77,7 @@ def _law(rd, a, b, c, d, s, t, dt_ref, rr):
     return pair_penalty(m_i, m_j, k_floor, dt_ref, rr[0], rr[1])
 
 
-@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+@njit(cache=True, inline="always", error_model="numpy")
 def pair_plane(p, pairs, rd, X, Xp, h, rr, pp, ps) -> None:
     """Separating plane of pair ``p`` at the (sub-)step start ``X`` (``Xp``: predicted end, for
     the margin): closest-point parameters, normal, start penetration, offset, near flag."""
