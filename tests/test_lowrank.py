@@ -119,5 +119,5 @@ def test_rods_coupled_by_contacts_solve_like_dense(lu_rods):
         sl = slice(boff[k], boff[k + 1])
         (block_lu_solve if lu[k] else block_solve)(A[sl], nb, y[sl])
     lowrank_apply(nc, act, cdir, csup, pairs, seg_a, seg_b, pp, node_block, node_rod, boff, fixed,
-                  Z, S, u, y, lu, panels)
+                  Z, S, u, y, panels)
     assert np.allclose(y.ravel(), expected, rtol=1e-10, atol=1e-12)

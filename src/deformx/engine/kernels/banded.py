@@ -389,8 +389,9 @@ def _panel_mul(P, I, m, p) -> None:
 def block_solve_panel(A, nb, P, p, first, lu=False) -> None:
     """:func:`block_solve` (or, with ``lu``, :func:`block_lu_solve`) for the ``p`` right-hand
     sides of the panel ``P`` (shape (nb, 3, >= p): block row, component, column), all zero
-    before block ``first``. Each row's work runs along the columns, which vectorises: per
-    right-hand side ~3x cheaper than one recurrence at a time (a pile's rod-rod columns)."""
+    before block ``first``. Each row's work runs along the columns (a pile's rod-rod columns,
+    ~15 per rod: ~1.1x faster than three interleaved recurrences at a time; numba's loops
+    vectorise only 2 wide here)."""
     # Forward (unit lower L, both factors): y_I = b_I - L[I, I-2] y_{I-2} - L[I, I-1] y_{I-1}.
     for I in range(first, nb):
         if I - 2 >= first:

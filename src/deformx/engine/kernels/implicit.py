@@ -888,7 +888,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     block_solve(A[bo:bo + nb], nb, rhs[bo:bo + nb])
             if n_act > 0:
                 lowrank_apply(n_act, act, cdir, csup, pairs, seg_a, seg_b, pp, node_block,
-                              node_rod, boff, fixed, Z, S, u, rhs, lu, panels)
+                              node_rod, boff, fixed, Z, S, u, rhs, panels)
             # Update size relative to each rod's element length; the island's is the largest.
             update = 0.0
             for k in range(K):

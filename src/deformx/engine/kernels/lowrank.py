@@ -63,8 +63,9 @@ def lowrank_factor(plist, m, pairs, seg_a, seg_b, pp, node_block, node_rod, boff
                    act, cdir, ck, csup, Z, S, lu, panels):
     """The active contacts' columns (per pair its normal and, with friction, two tangents:
     pair ``act[c]``, direction ``cdir[c]``, stiffness ``ck[c]``; returns their count), ``Z =
-    D^-1 G`` and the factor of ``K^-1 + G^T Z`` into ``S``: Cholesky (lower), or, where a
-    rod's factor is block LU (``lu[slot] != 0``), LU (unit lower and upper in one).
+    D^-1 G`` and the LU factor (no pivoting; unit lower and upper in one) of ``K^-1 + G^T Z``
+    into ``S``, eliminating only its upper half where no rod's factor is block LU (``lu[slot]
+    != 0``) and the matrix is symmetric.
     ``node_block`` maps a node to its block in the island's system, ``node_rod`` to its rod's
     slot; ``boff`` the rods' block offsets. ``Z`` (flat) holds per rod slot ``k`` a panel
     (its blocks, 3, its columns) from ``zoff[k]``: the columns of the pairs that touch it,
@@ -79,19 +80,20 @@ def lowrank_factor(plist, m, pairs, seg_a, seg_b, pp, node_block, node_rod, boff
         n = (pp[p, PP_N], pp[p, PP_N + 1], pp[p, PP_N + 2])
         a = (pp[p, PP_SH], pp[p, PP_SH + 1], pp[p, PP_SH + 2])
         b = (n[1] * a[2] - n[2] * a[1], n[2] * a[0] - n[0] * a[2], n[0] * a[1] - n[1] * a[0])
+        ka, kb = node_rod[seg_a[pairs[p, 0]]], node_rod[seg_a[pairs[p, 1]]]
         for dirn, k in ((n, pp[p, PP_KN]), (a, pp[p, PP_KA]), (b, pp[p, PP_KB])):
             if k > 0.0:
                 act[nc] = p
                 cdir[nc, 0], cdir[nc, 1], cdir[nc, 2] = dirn
                 ck[nc] = k
-                nodes, w = _corners(p, pairs, seg_a, seg_b, pp)
-                csup[nc, 0] = node_rod[nodes[0]]
-                csup[nc, 1] = node_rod[nodes[2]]
+                csup[nc, 0] = ka
+                csup[nc, 1] = kb
                 nc += 1
     S = borrow(S, 0, (nc, nc))  # compact: the flat buffer holds up to (3 m)^2
     # Each rod's columns, in column order (a self-contact's once).
     for k in range(K + 1):
         coff[k] = 0
+    zoff[0] = 0
     for c in range(nc):
         coff[csup[c, 0] + 1] += 1
         if csup[c, 1] != csup[c, 0]:
@@ -164,9 +166,9 @@ def lowrank_factor(plist, m, pairs, seg_a, seg_b, pp, node_block, node_rod, boff
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def lowrank_apply(nc, act, cdir, csup, pairs, seg_a, seg_b, pp, node_block, node_rod, boff,
-                  fixed, Z, S, u, y, lu, panels) -> None:
+                  fixed, Z, S, u, y, panels) -> None:
     """``y`` (= D^-1 b on entry) becomes the coupled solution ``y - Z S^-1 G^T y`` (``S``,
-    ``Z`` and ``panels`` as ``lowrank_factor`` left them for the same ``lu``)."""
+    ``Z`` and ``panels`` as ``lowrank_factor`` left them)."""
     coff, cols, zoff, row = panels
     S = borrow(S, 0, (nc, nc))
     for c in range(nc):  # forward: L (unit lower) ...
