@@ -56,11 +56,14 @@ from .segments import (
 from ..kernels.refcount import NO_REFCOUNT
 
 SP_K = 2  # contact planes per query slot
-SP_COLS_I, SP_COLS_F = 5, 17
+SP_COLS_I, SP_COLS_F = 5, 21
 SP_SRC, SP_ANCHORED, SP_SLIDING, SP_SET, SP_FLIPS = 0, 1, 2, 3, 4
 SP_Q, SP_N, SP_S, SP_D0, SP_A, SP_AS, SP_PEN, SP_FN, SP_OFF, SP_FROZEN = (
     0, 3, 6, 7, 8, 11, 12, 13, 14, 15)
 SP_KMUL = 16
+# The friction's slope along the slip used at the last evaluation (-1: none yet this step) and
+# the slip (3) it was evaluated at (``_slip_slope``).
+SP_KP, SP_SP = 17, 18
 # SP_SET: within a step a contact is inactive (0), active (1) or released (2: a plane that
 # pulled near convergence, out for the rest of the step); SP_FLIPS counts its switches.
 INACTIVE, ACTIVE, RELEASED = 0, 1, 2
@@ -77,6 +80,10 @@ Y_SLIDE, Y_ANCHOR = 3.0, 1.0
 # the spring's own mu N / k is used when larger): a stiff wire's mu N / k can be 0.01 um,
 # finer than Newton resolves, and friction would then switch direction between iterates.
 STICK_ZONE = 1e-6
+# Along the slip Newton takes the chord of the friction's saturation between the last iterate
+# and this one (the secant method), no less than this fraction of the secant |f_t| / |s| and
+# only while the slip keeps its direction within SLIP_COS (see ``_slip_slope``).
+SLOPE_FLOOR, SLIP_COS = 0.25, 0.99
 # A segment whose middle lies this many radii closer to a shape than its ends' mean gets a
 # plane at its middle (the surface curves under it).
 SAG = 0.1
@@ -471,6 +478,7 @@ def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> i
             sp_f[slot, pick, SP_OFF] = 0.0
             sp_f[slot, pick, SP_FROZEN] = -1.0
             sp_f[slot, pick, SP_KMUL] = 1.0
+            sp_f[slot, pick, SP_KP] = -1.0
             sp_f[slot, pick, SP_PEN] = pen
             sp_f[slot, pick, SP_FN] = 0.0
             added += 1
@@ -526,16 +534,49 @@ def _add_coupling(el_K, e, q, w, u, n):
             el_K[e, 3 + q, i, j] += w * u[i] * n[j]
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _slip_slope(sp_f, slot, j, s0, s1, s2, smag, delta, th, kt, kb, chord):
+    """Friction's stiffness along the slip ``s`` (m) of plane ``j`` of ``slot`` (N/m): with
+    ``chord``, the chord of kt tanh(|s| / delta) between the slip of the last evaluation and this
+    one where the slip kept its direction, no less than the tangent or SLOPE_FLOOR kb and no more
+    than kb (the secant |f_t| / |s|); else kb. Stores this evaluation's slope and slip.
+
+    Newton with the secant along a slip between sticking and sliding (tanh's tangent 0.07-0.4
+    of its secant) converges linearly, 0.5-0.85 per iteration (a rope dragged over a kerb, the
+    rope leaving a cylinder it wraps); the chord tends to the tangent as the iterates converge.
+    Not the tangent itself, nor the chord unbounded: tanh's Newton diverges from a slip more than
+    about one smoothing width away, and a steel wire resting on a cylinder was kicked."""
+    ka = kb
+    kp = sp_f[slot, j, SP_KP]
+    p0, p1, p2 = sp_f[slot, j, SP_SP], sp_f[slot, j, SP_SP + 1], sp_f[slot, j, SP_SP + 2]
+    if kp >= 0.0:
+        if p0 == s0 and p1 == s1 and p2 == s2:  # the same iterate again (after a release)
+            ka = kp
+        elif chord:
+            pm = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+            if (pm > 0.0 and s0 * p0 + s1 * p1 + s2 * p2 > SLIP_COS * smag * pm
+                    and abs(smag - pm) > 1e-6 * smag):
+                y, yp = smag / delta, pm / delta
+                chord_slope = kt * (th - math.tanh(yp)) / (y - yp)
+                ka = min(kb, max(chord_slope, kt * (1.0 - th * th), SLOPE_FLOOR * kb))
+    sp_f[slot, j, SP_KP] = ka
+    sp_f[slot, j, SP_SP] = s0
+    sp_f[slot, j, SP_SP + 1] = s1
+    sp_f[slot, j, SP_SP + 2] = s2
+    return ka
+
+
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i, sp_f, commit,
-                 stats) -> int:
+                 stats, chord) -> int:
     """Add the contact forces of rod ``r``'s slot planes at the iterate (positions ``X``,
     velocities ``V``; ``Xs`` the step start), their stiffness into ``el_K`` (per element: node
     blocks a-a, b-a, b-b; then the friction's coupling to the normal force, counted in
     ``r1[R_COUPLED]``) and, with ``commit`` (accepted step), instead of the stiffness store
     the friction anchors and the colliders' reactions; returns the contact count.
     ``stats[5]`` keeps the deepest start penetration (m) of a contact deeper than one step
-    resolves and 20 % of the radius."""
+    resolves and 20 % of the radius. ``chord``: friction's slope along the slip by the secant
+    method (``_slip_slope``), else the secant |f_t| / |s|."""
     mass, node_kmin, node_radius = rd.n1[N_MASS], rd.n1[N_NODE_KMIN], rd.n1[N_NODE_RADIUS]
     force, contact_force, el_K = rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE], rd.el_K
     n_planes = planes.shape[0]
@@ -643,6 +684,9 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                         # then overshoot the stick point and flip the friction every iterate.
                         kb = kt * th / y
                         ka = max(kt * (1.0 - th * th), kb)
+                        if not commit:
+                            ka = _slip_slope(sp_f, slot, j, s0, s1, s2, smag, delta, th, kt, kb,
+                                             chord)
                         if frozen < 0.0:
                             # |f_t| = mu N tanh(|s| k / (mu N)): d|f_t|/dN = mu (th - y (1 - th^2))
                             cu = mu * (th - y * (1.0 - th * th))
@@ -727,6 +771,7 @@ def start_penetrations(r, n0, nn, e0, ne, h, X, planes, rd, cols, sp_i, sp_f, n_
             if not node:
                 pen -= (1.0 - s) * _node_pen(sp_i, sp_f, a, src) + s * _node_pen(sp_i, sp_f, b, src)
             sp_f[slot, j, SP_PEN] = pen
+            sp_f[slot, j, SP_KP] = -1.0
             sp_f[slot, j, SP_D0] = pen
             off = min(sp_f[slot, j, SP_OFF], pen) if sp_i[slot, j, SP_ANCHORED] != 0 else pen
             sp_f[slot, j, SP_OFF] = max(off - V_OUT * h, 0.0)

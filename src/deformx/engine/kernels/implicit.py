@@ -288,7 +288,7 @@ def _assemble(h, ext, rd, nu, kv, geometric, A):
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
+def _rod_contacts(r, ext, h, rd, planes, cols, commit, near, chord):
     """Contact forces of rod ``r``'s slot planes (world planes, meshes, primitives) at the
     iterate into ``force`` and ``contact_force`` (cleared first), their stiffness into
     ``el_K``; ``commit`` (accepted step) stores the friction anchors and reactions instead of
@@ -296,7 +296,8 @@ def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
     they do). ``near``: whether the rod's slots hold a plane this step; without one only
     ``contact_force`` and the colliders' reactions are cleared (``el_K`` is neither cleared
     nor added: a rope swinging above the ground walked and cleared every slot and element at
-    every iteration, ~1/3 of its step)."""
+    every iteration, ~1/3 of its step). ``chord``: friction's slope along the slip by the secant
+    method (``speculative._slip_slope``)."""
     n0, e0, _, ne, nn, _, _ = ext
     contact_force, el_K = rd.n3[N_CONTACT_FORCE], rd.el_K
     for i in range(n0, n0 + nn):
@@ -320,11 +321,12 @@ def _rod_contacts(r, ext, h, rd, planes, cols, commit, near):
                     el_K[e, q, i, j] = 0.0
     # As stiff as the explicit integrator's contact at dt <= 1e-4 s.
     return plane_forces(r, n0, nn, e0, ne, h, min(h, 1e-4), rd.n3[N_POS], rd.n3[N_XN],
-                        rd.n3[N_VEL], planes, rd, cols, rd.sp_i, rd.sp_f, commit, rd.stats[r])
+                        rd.n3[N_VEL], planes, rd, cols, rd.sp_i, rd.sp_f, commit, rd.stats[r],
+                        chord)
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def _contacts_again(r, ext, h, rd, planes, cols):
+def _contacts_again(r, ext, h, rd, planes, cols, chord):
     """``_rod_contacts`` at the same iterate again (after planes were released): their
     forces are taken out of ``force`` first; returns the contact count."""
     n0, nn = ext[0], ext[4]
@@ -332,7 +334,7 @@ def _contacts_again(r, ext, h, rd, planes, cols):
     for i in range(n0, n0 + nn):
         for d in range(3):
             force[i, d] -= contact_force[i, d]
-    return _rod_contacts(r, ext, h, rd, planes, cols, False, True)
+    return _rod_contacts(r, ext, h, rd, planes, cols, False, True, chord)
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
@@ -744,10 +746,14 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             if failed != OK:
                 break
             active = 0
+            # The friction's slope along the slip by the secant method for a rod alone (an
+            # island's rod-rod contacts took more iterations: a pile of eight ropes 6.59 ->
+            # 7.04 per step at 1e-2), not after a damped update nor in a careful retry.
+            chord = shortcuts and m == 0 and step_scale == 1.0
             if any_contact:
                 for k in range(K):
                     on = _rod_contacts(isl[k], _extent(rd, isl[k]), hs, rd, planes, cols,
-                                       False, near[k] != 0.0)
+                                       False, near[k] != 0.0, chord)
                     if it == 1 and on != rd.r1[R_CONTACTS][isl[k]]:
                         calm[k] = 0.0
                     active += on
@@ -769,7 +775,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     active = 0
                     for k in range(K):
                         active += _contacts_again(isl[k], _extent(rd, isl[k]), hs, rd, planes,
-                                                  cols)
+                                                  cols, chord)
                     budget = max(budget, it + max_iter)
                     round_start = it - 1  # this iteration is the new round's first
                     previous = 0.0  # forces a fresh factorisation
@@ -1086,7 +1092,7 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
             rd.r1[R_CONTACTS][r] = 0.0
             if any_contact:
                 rd.r1[R_CONTACTS][r] = _rod_contacts(r, ext, hs, rd, planes, cols, True,
-                                                     near[k] != 0.0)
+                                                     near[k] != 0.0, False)
             if cols is not None:
                 collider_impulses(r, hs, cols, env)
             clamp_rates(elapsed + hs, c0, c1, f0, f1, pos, vel, Q, omega, env, env.dloc[r])
