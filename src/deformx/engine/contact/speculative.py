@@ -679,9 +679,10 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                         sh = (s0 / smag, s1 / smag, s2 / smag)
                         scale = limit * th / smag
                         f = (f[0] - scale * s0, f[1] - scale * s1, f[2] - scale * s2)
-                        # Secant stiffness (|f_t| / |s|) across and along the force: along it
-                        # the tangent kt (1 - th^2) vanishes once saturated, and Newton would
-                        # then overshoot the stick point and flip the friction every iterate.
+                        # Secant stiffness (|f_t| / |s|) across the force; along it the
+                        # tangent kt (1 - th^2) vanishes once saturated, and Newton would then
+                        # overshoot the stick point and flip the friction every iterate: the
+                        # secant there too, or the bounded chord of ``_slip_slope``.
                         kb = kt * th / y
                         ka = max(kt * (1.0 - th * th), kb)
                         if not commit:
