@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from deformx.engine.contact.speculative import (
-    SLIP_COS, SLOPE_FLOOR, SP_COLS_F, SP_KP, SP_SP, _slip_slope,
+    SLIP_COS, SLIP_LINEAR, SLOPE_FLOOR, SP_COLS_F, SP_KP, SP_SP, _slip_slope,
 )
 
 KT, DELTA = 2.0e4, 1.0e-6  # N/m at zero slip, m
@@ -86,6 +86,10 @@ def test_secant_where_the_slip_turns_or_the_chord_is_off_and_floor_when_saturate
     sp_f = _fresh()
     _slope(sp_f, (2.5e-6, 0.0, 0.0))
     ka, kb = _slope(sp_f, (2.0e-6, 0.0, 0.0), chord=False)
+    assert ka == kb
+    sp_f = _fresh()  # where tanh is still ~linear its slopes differ by little: the secant
+    _slope(sp_f, (0.8 * SLIP_LINEAR * DELTA, 0.0, 0.0))
+    ka, kb = _slope(sp_f, (0.6 * SLIP_LINEAR * DELTA, 0.0, 0.0))
     assert ka == kb
     sp_f = _fresh()  # deep in saturation the chord is ~0: the floor holds Newton back
     _slope(sp_f, (6.0e-6, 0.0, 0.0))

@@ -84,6 +84,7 @@ STICK_ZONE = 1e-6
 # and this one (the secant method), no less than this fraction of the secant |f_t| / |s| and
 # only while the slip keeps its direction within SLIP_COS (see ``_slip_slope``).
 SLOPE_FLOOR, SLIP_COS = 0.25, 0.99
+SLIP_LINEAR = 0.3  # below this many smoothing widths of slip the secant (within 6 % of tanh')
 # A segment whose middle lies this many radii closer to a shape than its ends' mean gets a
 # plane at its middle (the surface curves under it).
 SAG = 0.1
@@ -552,7 +553,7 @@ def _slip_slope(sp_f, slot, j, s0, s1, s2, smag, delta, th, kt, kb, chord):
     if kp >= 0.0:
         if p0 == s0 and p1 == s1 and p2 == s2:  # the same iterate again (after a release)
             ka = kp
-        elif chord:
+        elif chord and smag > SLIP_LINEAR * delta:  # (below, tanh's slopes are all ~kt)
             pm = math.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
             if (pm > 0.0 and s0 * p0 + s1 * p1 + s2 * p2 > SLIP_COS * smag * pm
                     and abs(smag - pm) > 1e-6 * smag):
