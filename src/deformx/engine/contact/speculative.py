@@ -685,8 +685,7 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                         # overshoot the stick point and flip the friction every iterate: the
                         # secant there too, or the bounded chord of ``_slip_slope``.
                         kb = kt * th / y
-                        ka = max(kt * (1.0 - th * th), kb)
-                        if not commit:
+                        if not commit:  # (an accepted step's evaluation adds no stiffness)
                             ka = _slip_slope(sp_f, slot, j, s0, s1, s2, smag, delta, th, kt, kb,
                                              chord)
                         if frozen < 0.0:
