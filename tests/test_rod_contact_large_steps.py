@@ -80,11 +80,14 @@ def test_rope_dropped_across_a_rope_stays_on_top_at_large_steps(radius, E, heigh
     assert np.abs(upper.velocities).max() < 1.0  # it came to rest on top, no bounce away
 
 
-def test_pile_of_eight_ropes_keeps_every_gap_and_the_order_they_fell_in():
+# (seed 4: the ropes dropped elsewhere overlapped by 37 % of r while a pair's plane kept the
+# closest points of the step start; see ``pairplanes.refind_pairs``)
+@pytest.mark.parametrize("seed", [3, 4])
+def test_pile_of_eight_ropes_keeps_every_gap_and_the_order_they_fell_in(seed):
     radius = 0.004
     world = dx.World(dt=DT, integrator="stable")
     world.add_plane(friction=0.5)
-    rng = np.random.default_rng(3)
+    rng = np.random.default_rng(seed)
     rods = []
     for k in range(8):
         a = rng.uniform(0.0, np.pi)

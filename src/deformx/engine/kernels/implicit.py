@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from ..contact.pairplanes import (PP_COLS, PS_COLS, commit_pairs, pair_plane, pair_plane_forces,
-                                  release_pulling_pairs)
+                                  refind_pairs, release_pulling_pairs)
 from ..contact.speculative import (SP_K, freeze_friction_bounds, gather_planes, plane_forces,
                                    project_predictor, refind_segments, release_pulling,
                                    start_penetrations, stiffen_deep)
@@ -1027,13 +1027,16 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 # (an unconverged iterate about to be accepted is checked as well)
                 settled = converged or update <= ACCEPT
                 added = 0
-                if settled and n_cols > 0 and refinds < MAX_REFIND:
-                    # Segments that cut into a collider between their planes get one there.
+                if settled and (n_cols > 0 or m > 0) and refinds < MAX_REFIND:
+                    # Segments that cut into a collider between their planes get one there,
+                    # and pairs that overlap away from theirs a new one.
                     for k in range(K):
-                        if near[k] != 0.0:
+                        if near[k] != 0.0 and n_cols > 0:
                             n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
                             added += refind_segments(isl[k], n0, nn, e0, ne, pos, xn, planes,
                                                      rd, cols, rd.sp_i, rd.sp_f)
+                    if m > 0:
+                        added += refind_pairs(plist, m, pairs, rd, pos, xn, pp, ps)
                     refinds += 1 if added > 0 else 0
                 if added == 0 and settled and sources and stiffened < MAX_STIFFEN:
                     # Contacts pressed deeper than their penalty was sized for get stiffer.
