@@ -40,11 +40,12 @@ from ..kernels.bundles import (
     N_NODE_KMIN,
 )
 from .rodrod import pair_penalty
-from .speculative import ACTIVE, INACTIVE, MARGIN, PAIR_FLIPS, REFIND_DEPTH, V_OUT, switch_active
+from .speculative import (ACTIVE, INACTIVE, MARGIN, MAX_KMUL, PAIR_FLIPS, REFIND_DEPTH,
+                          STIFFEN_DEPTH, V_OUT, switch_active)
 from ..kernels.refcount import NO_REFCOUNT
 
-PP_S, PP_T, PP_N, PP_D0, PP_OFF, PP_KN, PP_FN, PP_KA, PP_KB, PP_SH, PP_LAG, PP_COLS = (
-    0, 1, 2, 5, 6, 7, 8, 9, 10, 11, 14, 15)
+PP_S, PP_T, PP_N, PP_D0, PP_OFF, PP_KN, PP_FN, PP_KA, PP_KB, PP_SH, PP_LAG, PP_KMUL, PP_COLS = (
+    0, 1, 2, 5, 6, 7, 8, 9, 10, 11, 14, 15, 16)
 PS_SET, PS_NEAR, PS_FLIPS, PS_COLS = 0, 1, 2, 3
 # A pair that has switched this many times within a step is no longer released: it sits at the
 # edge of touching, pressed together without its force and pulling with it, and each release
@@ -118,6 +119,7 @@ def pair_plane(p, pairs, rd, X, Xp, h, rr, pp, ps) -> None:
     pp[p, PP_LAG] = max(kc * (d0 - pp[p, PP_OFF]), 0.0)
     pp[p, PP_KN] = 0.0
     pp[p, PP_FN] = 0.0
+    pp[p, PP_KMUL] = 1.0
     ps[p, PS_SET] = INACTIVE
     ps[p, PS_FLIPS] = 0
     travel = max(_travel(X, Xp, a), _travel(X, Xp, b)) + max(_travel(X, Xp, c), _travel(X, Xp, d))
@@ -155,7 +157,8 @@ def pair_plane_forces(plist, m, pairs, rd, X, V, h, dt_ref, rr, pp, ps) -> int:
         pen = radius[i] + radius[j] - n_dot(pp, p, (x[0] - y[0], x[1] - y[1], x[2] - y[2]))
         if state == INACTIVE and pen <= 0.0:
             continue
-        kc, cc = _law(rd, a, b, c, d, s, t, dt_ref, rr)
+        # (a stiffness multiplier kmul shortens the reference step by sqrt(kmul))
+        kc, cc = _law(rd, a, b, c, d, s, t, dt_ref / math.sqrt(pp[p, PP_KMUL]), rr)
         fn = kc * (pen - pp[p, PP_OFF]) + cc * (pen - max(pp[p, PP_D0], 0.0)) / h
         push, ps[p, PS_SET], ps[p, PS_FLIPS] = switch_active(state, ps[p, PS_FLIPS], fn,
                                                              PAIR_FLIPS)
@@ -208,13 +211,14 @@ def pair_plane_forces(plist, m, pairs, rd, X, V, h, dt_ref, rr, pp, ps) -> int:
 def refind_pairs(plist, m, pairs, rd, X, Xs, pp, ps) -> int:
     """At a converged iterate ``X`` (``Xs`` the step start): give each pair whose segments now
     overlap deeper than ``REFIND_DEPTH`` of the thinner radius, and deeper than its plane sees
-    by as much, the plane of its closest points at ``X``, with the normal they had at the step
-    start (the sides stay those of the start); returns how many (the caller iterates on).
+    by half as much, the plane of its closest points at ``X``, with the normal they had at the
+    step start (the sides stay those of the start); returns how many (the caller iterates on).
 
     A pair's plane keeps the closest points of the step start: segments that slide along each
     other or turn within a 10 ms step can overlap elsewhere (a pile of eight ropes dropped from
-    other places: 24-38 % of the radius). As for ``speculative.refind_segments``, the new plane
-    acts with no offset and as if the segments had started the step apart."""
+    other places: 24-38 % of the radius; with a lag of a whole REFIND_DEPTH allowed, 22 %
+    where the plane saw 13 %). As for ``speculative.refind_segments``, the new plane acts with
+    no offset and as if the segments had started the step apart."""
     seg_a, seg_b, radius = rd.ei[E_SEG_A], rd.ei[E_SEG_B], rd.e1[E_SEG_RADIUS]
     added = 0
     for q in range(m):
@@ -230,7 +234,8 @@ def refind_pairs(plist, m, pairs, rd, X, Xs, pp, ps) -> int:
         if pen <= depth:
             continue
         xp, yp = _point(X, a, b, pp[p, PP_S]), _point(X, c, d, pp[p, PP_T])
-        if reach - n_dot(pp, p, (xp[0] - yp[0], xp[1] - yp[1], xp[2] - yp[2])) >= pen - depth:
+        seen = reach - n_dot(pp, p, (xp[0] - yp[0], xp[1] - yp[1], xp[2] - yp[2]))
+        if seen >= pen - 0.5 * depth:
             continue  # its plane holds it
         xs, ys = _point(Xs, a, b, s), _point(Xs, c, d, t)
         v = (xs[0] - ys[0], xs[1] - ys[1], xs[2] - ys[2])
@@ -251,6 +256,35 @@ def refind_pairs(plist, m, pairs, rd, X, Xs, pp, ps) -> int:
         ps[p, PS_NEAR] = 1
         added += 1
     return added
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def stiffen_pairs(plist, m, pairs, rd, X, rr, pp, ps) -> int:
+    """At a (nearly) converged iterate ``X``: double the automatic penalty of each pushing
+    pair pressed deeper than ``STIFFEN_DEPTH`` of the thinner radius (up to ``MAX_KMUL``
+    times, for the rest of the step), as ``speculative.stiffen_deep`` does for the collider
+    planes; returns how many (the caller then iterates on). The penalty is sized for the
+    lighter point's own impact; a rope landing on a pile presses the ropes under it with more
+    (piles of eight dropped from 14 places: 21-23 % of r in 4 of them, 10-19 % since). Not
+    grown by the square of the depth, as the planes': more steps of the piles were halved."""
+    if rr[0] >= 0.0:  # the user's own stiffness is left alone
+        return 0
+    seg_a, seg_b, radius = rd.ei[E_SEG_A], rd.ei[E_SEG_B], rd.e1[E_SEG_RADIUS]
+    count = 0
+    for q in range(m):
+        p = plist[q]
+        if ps[p, PS_SET] != ACTIVE or pp[p, PP_FN] <= 0.0 or pp[p, PP_KMUL] >= MAX_KMUL:
+            continue
+        i, j = pairs[p, 0], pairs[p, 1]
+        x = _point(X, seg_a[i], seg_b[i], pp[p, PP_S])
+        y = _point(X, seg_a[j], seg_b[j], pp[p, PP_T])
+        r = min(radius[i], radius[j])
+        deep = radius[i] + radius[j] - n_dot(pp, p, (x[0] - y[0], x[1] - y[1], x[2] - y[2]))
+        deep -= pp[p, PP_OFF]
+        if deep > STIFFEN_DEPTH * r:
+            pp[p, PP_KMUL] = min(2.0 * pp[p, PP_KMUL], MAX_KMUL)
+            count += 1
+    return count
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)

@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from ..contact.pairplanes import (PP_COLS, PS_COLS, commit_pairs, pair_plane, pair_plane_forces,
-                                  refind_pairs, release_pulling_pairs)
+                                  refind_pairs, release_pulling_pairs, stiffen_pairs)
 from ..contact.speculative import (SP_K, freeze_friction_bounds, gather_planes, plane_forces,
                                    project_predictor, refind_segments, release_pulling,
                                    start_penetrations, stiffen_deep)
@@ -1038,13 +1038,15 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     if m > 0:
                         added += refind_pairs(plist, m, pairs, rd, pos, xn, pp, ps)
                     refinds += 1 if added > 0 else 0
-                if added == 0 and settled and sources and stiffened < MAX_STIFFEN:
+                if added == 0 and settled and (sources or m > 0) and stiffened < MAX_STIFFEN:
                     # Contacts pressed deeper than their penalty was sized for get stiffer.
                     for k in range(K):
-                        if near[k] != 0.0:
+                        if near[k] != 0.0 and sources:
                             n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
                             added += stiffen_deep(n0, nn, e0, ne, pos.shape[0], planes, rd, cols,
                                                   rd.sp_i, rd.sp_f)
+                    if m > 0:
+                        added += stiffen_pairs(plist, m, pairs, rd, pos, rr, pp, ps)
                     stiffened += 1 if added > 0 else 0
                 if added > 0:  # iterate on with the new planes or stiffnesses
                     budget = it + max_iter
