@@ -23,8 +23,8 @@ most ``mu N0``, with ``N0`` the normal force at the step start (lagged, as in IP
 pair's force acts equal and opposite on both, so momentum is conserved exactly.
 
 Per pair (rows of ``pp``): s, t, normal (3), d0, d_off, effective stiffness k + c / h, normal
-force N, the friction's stiffness along and across the slip, the slip direction (3) and the
-lagged normal force N0; ``ps``:
+force N, the friction's stiffness along and across the slip, the slip direction (3), the
+lagged normal force N0 and the penalty's multiplier within the step (``stiffen_pairs``); ``ps``:
 active-set state, whether the pair is near enough to take part this step, its switches.
 """
 
