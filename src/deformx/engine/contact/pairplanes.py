@@ -131,6 +131,15 @@ def n_dot(pp, p, v):
     return pp[p, PP_N] * v[0] + pp[p, PP_N + 1] * v[1] + pp[p, PP_N + 2] * v[2]
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def plane_pen(pp, p, X, a, b, c, d, reach):
+    """Penetration (m) of pair ``p`` (segments ab and cd, radii summing to ``reach``) at its
+    plane's points, at positions ``X``."""
+    x = _point(X, a, b, pp[p, PP_S])
+    y = _point(X, c, d, pp[p, PP_T])
+    return reach - n_dot(pp, p, (x[0] - y[0], x[1] - y[1], x[2] - y[2]))
+
+
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def pair_plane_forces(plist, m, pairs, rd, X, V, h, dt_ref, rr, pp, ps) -> int:
     """Forces of the island's pairs ``plist[:m]`` at the iterate (``X``, ``V``), equal and
@@ -151,10 +160,8 @@ def pair_plane_forces(plist, m, pairs, rd, X, V, h, dt_ref, rr, pp, ps) -> int:
         i, j = pairs[p, 0], pairs[p, 1]
         a, b, c, d = seg_a[i], seg_b[i], seg_a[j], seg_b[j]
         s, t = pp[p, PP_S], pp[p, PP_T]
-        x = _point(X, a, b, s)
-        y = _point(X, c, d, t)
         n = (pp[p, PP_N], pp[p, PP_N + 1], pp[p, PP_N + 2])
-        pen = radius[i] + radius[j] - n_dot(pp, p, (x[0] - y[0], x[1] - y[1], x[2] - y[2]))
+        pen = plane_pen(pp, p, X, a, b, c, d, radius[i] + radius[j])
         if state == INACTIVE and pen <= 0.0:
             continue
         # (a stiffness multiplier kmul shortens the reference step by sqrt(kmul))
@@ -233,9 +240,7 @@ def refind_pairs(plist, m, pairs, rd, X, Xs, pp, ps) -> int:
         pen = reach - math.sqrt((x[0] - y[0]) ** 2 + (x[1] - y[1]) ** 2 + (x[2] - y[2]) ** 2)
         if pen <= depth:
             continue
-        xp, yp = _point(X, a, b, pp[p, PP_S]), _point(X, c, d, pp[p, PP_T])
-        seen = reach - n_dot(pp, p, (xp[0] - yp[0], xp[1] - yp[1], xp[2] - yp[2]))
-        if seen >= pen - 0.5 * depth:
+        if plane_pen(pp, p, X, a, b, c, d, reach) >= pen - 0.5 * depth:
             continue  # its plane holds it
         xs, ys = _point(Xs, a, b, s), _point(Xs, c, d, t)
         v = (xs[0] - ys[0], xs[1] - ys[1], xs[2] - ys[2])
@@ -276,12 +281,9 @@ def stiffen_pairs(plist, m, pairs, rd, X, rr, pp, ps) -> int:
         if ps[p, PS_SET] != ACTIVE or pp[p, PP_FN] <= 0.0 or pp[p, PP_KMUL] >= MAX_KMUL:
             continue
         i, j = pairs[p, 0], pairs[p, 1]
-        x = _point(X, seg_a[i], seg_b[i], pp[p, PP_S])
-        y = _point(X, seg_a[j], seg_b[j], pp[p, PP_T])
-        r = min(radius[i], radius[j])
-        deep = radius[i] + radius[j] - n_dot(pp, p, (x[0] - y[0], x[1] - y[1], x[2] - y[2]))
-        deep -= pp[p, PP_OFF]
-        if deep > STIFFEN_DEPTH * r:
+        deep = (plane_pen(pp, p, X, seg_a[i], seg_b[i], seg_a[j], seg_b[j],
+                          radius[i] + radius[j]) - pp[p, PP_OFF])
+        if deep > STIFFEN_DEPTH * min(radius[i], radius[j]):
             pp[p, PP_KMUL] = min(2.0 * pp[p, PP_KMUL], MAX_KMUL)
             count += 1
     return count
