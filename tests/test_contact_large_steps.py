@@ -94,6 +94,18 @@ def test_thin_soft_rope_whipped_round_a_cylinder_stays_outside_from_other_height
     _drop_stays_outside("cylinder", 1e-3, 1e5, z0, caplog)
 
 
+# Every drop again from 0.1-0.8 mm higher: a requirement met at one start only is luck (three
+# tests once passed at their own start and failed 0.2-0.6 mm higher; docs/contact.md).
+NEARBY = tuple(1e-4 * k for k in range(1, 9))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kind, r, E", CASES)
+def test_rope_dropped_from_nearby_heights_stays_outside(kind, r, E, caplog):
+    for dz in NEARBY:
+        _drop_stays_outside(kind, r, E, HEIGHT + dz, caplog)
+
+
 def _drop_stays_outside(kind, r, E, z0, caplog):
     world, rope, sdf = _scene(kind, r, E, z0=z0)
     worst = 0.0
@@ -184,27 +196,47 @@ def _dragged(kind: str):
     return world, rope, velocity, sdf
 
 
-@pytest.mark.parametrize("kind", ["kerb", "post"])
-def test_rope_dragged_over_a_kerb_and_round_a_post_does_not_tunnel(kind):
+def _drag(kind: str, speed: float = 1.0):
+    """Runs the drag (the clamp's horizontal velocity times ``speed``, the kerb's lift as it
+    is); returns the world, the rope and the deepest point of any segment inside the obstacle
+    over the run (m)."""
     world, rope, velocity, sdf = _dragged(kind)
     clamp = rope.fix_start()
     worst = -np.inf
     for s in range(70):
-        clamp.set_velocity(velocity(s * DT))
+        v = velocity(s * DT)
+        clamp.set_velocity((speed * v[0], speed * v[1], v[2]))
         world.step()
         worst = max(worst, float((rope.radius - sdf(_segment_points(rope.positions))).max()))
+    return world, rope, worst
+
+
+def _assert_dragged_past_without_tunnelling(rope, worst):
     assert worst <= 0.2 * rope.radius, f"{worst * 1e3:.3f} mm deep"
-    assert worst >= -0.05 * rope.radius  # it did press against the obstacle
-    assert rope.positions[-1, 0] > 0.25  # and was dragged past it, not held behind
+    assert rope.positions[-1, 0] > 0.25  # dragged past the obstacle, not held behind
+
+
+@pytest.mark.parametrize("kind", ["kerb", "post"])
+def test_rope_dragged_over_a_kerb_and_round_a_post_does_not_tunnel(kind):
+    _, rope, worst = _drag(kind)
+    _assert_dragged_past_without_tunnelling(rope, worst)
+    # it did touch the obstacle (over the kerb the rope mostly flies, its end whipped up: at
+    # 0.99 or 1.01 times the speed it passes 0.3 mm above the edge)
+    assert worst >= -0.05 * rope.radius
 
 
 @pytest.mark.parametrize("kind", ["kerb", "post"])
 def test_rope_dragged_over_a_kerb_and_round_a_post_without_halving(kind):
-    world, rope, velocity, _ = _dragged(kind)
-    clamp = rope.fix_start()
-    for s in range(70):
-        clamp.set_velocity(velocity(s * DT))
-        world.step()
+    world, _, _ = _drag(kind)
+    assert world.solver_stats()["halvings"] < 1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("speed", [0.95, 0.97, 0.99, 1.01, 1.03, 1.05])
+@pytest.mark.parametrize("kind", ["kerb", "post"])
+def test_rope_dragged_a_little_slower_or_faster_neither_tunnels_nor_halves(kind, speed):
+    world, rope, worst = _drag(kind, speed)
+    _assert_dragged_past_without_tunnelling(rope, worst)
     assert world.solver_stats()["halvings"] < 1
 
 

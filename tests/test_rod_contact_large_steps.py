@@ -60,9 +60,23 @@ def _crossing_heights(lower: np.ndarray, upper: np.ndarray):
     return 0.5 * (lower[i, 2] + lower[i + 1, 2]), 0.5 * (upper[j, 2] + upper[j + 1, 2])
 
 
-@pytest.mark.parametrize("radius, E, height", [(0.005, 1e6, 0.1), (0.005, 1e6, 1.0),
-                                               (0.002, 5e7, 0.1), (0.001, 2e11, 1.0)])
+ACROSS = [(0.005, 1e6, 0.1), (0.005, 1e6, 1.0), (0.002, 5e7, 0.1), (0.001, 2e11, 1.0)]
+
+
+@pytest.mark.parametrize("radius, E, height", ACROSS)
 def test_rope_dropped_across_a_rope_stays_on_top_at_large_steps(radius, E, height):
+    _dropped_across_stays_on_top(radius, E, height)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("radius, E, height", ACROSS)
+def test_rope_dropped_across_a_rope_from_nearby_heights_stays_on_top(radius, E, height):
+    """The same drops from 0.1-0.6 mm higher (a requirement met at one start only is luck)."""
+    for dz in (1e-4, 2e-4, 3e-4, 4e-4, 5e-4, 6e-4):
+        _dropped_across_stays_on_top(radius, E, height + dz)
+
+
+def _dropped_across_stays_on_top(radius, E, height):
     world = dx.World(dt=DT, integrator="stable")
     world.add_plane(friction=0.5)
     lower = world.add_rod(_rope((-0.2, 0.0, radius), (1, 0, 0), radius, E))
@@ -83,8 +97,10 @@ def test_rope_dropped_across_a_rope_stays_on_top_at_large_steps(radius, E, heigh
 # (seed 2: the ropes dropped elsewhere overlapped by 24 % of r while a pair's plane kept the
 # closest points of the step start, 23 % while it could lag by 10 % of r and the pairs' penalty
 # was not stiffened; see ``pairplanes.refind_pairs`` and ``stiffen_pairs``; seed 4: a step
-# halved while a stiffened pair had four iterations to settle again, not eight)
-@pytest.mark.parametrize("seed", [3, 2, 4])
+# halved while a stiffened pair had four iterations to settle again, not eight, as did 0, 5, 7
+# and 9; the slow tier drops the pile from fourteen seeds)
+@pytest.mark.parametrize("seed", [3, 2, 4] + [pytest.param(s, marks=pytest.mark.slow)
+                                              for s in (0, 1, 5, 6, 7, 8, 9, 10, 11, 12, 13)])
 def test_pile_of_eight_ropes_keeps_every_gap_and_the_order_they_fell_in(seed):
     radius = 0.004
     world = dx.World(dt=DT, integrator="stable")
