@@ -51,6 +51,7 @@ def pack_rods(rods: Sequence, dt: float, stable: bool = True) -> Packed:
     b["sp_i"][..., 0] = -1  # no contact planes yet
     b["pair_off"][:] = -1.0  # and no rod-rod contact
     b["pen_off"][:] = -1.0  # nor any contact of the explicit integrator
+    b["seg_off"][:] = -1.0
     b["seg_rod"][:] = -1
     b["excluded"][:] = 1
     segs, nodes = [], []

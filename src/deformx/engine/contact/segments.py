@@ -38,6 +38,7 @@ from ..kernels.refcount import NO_REFCOUNT
 from .plane import V_OUT, start_offset
 from .primitives import bounding_gap, segment_deepest, shape_sdf
 from ..kernels.bundles import (
+    E_SEG_OFF,
     N_CONTACT_FORCE,
     N_FORCE,
     N_MASS,
@@ -507,7 +508,7 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
     is scratch; ``wrench[r]`` is overwritten with the reactions.
     """
     mass, node_radius, node_kmin = rd.n1[N_MASS], rd.n1[N_NODE_RADIUS], rd.n1[N_NODE_KMIN]
-    pen_off = rd.n1[N_PEN_OFF]
+    pen_off, seg_off = rd.n1[N_PEN_OFF], rd.e1[E_SEG_OFF]
     el_K, force, contact_force = rd.el_K, rd.n3[N_FORCE], rd.n3[N_CONTACT_FORCE]
     kind, par, mesh_rng, allowed = cols.kind, cols.par, cols.rng, cols.allowed
     # Poses and velocities of the colliders as this rod sees them now (see drivers).
@@ -618,6 +619,9 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
         pb = (pos[b, 0], pos[b, 1], pos[b, 2])
         slot = n_nodes + e  # element queries and anchors follow the nodes
         anchored = False
+        speed = math.sqrt(max(vel[a, 0] ** 2 + vel[a, 1] ** 2 + vel[a, 2] ** 2,
+                              vel[b, 0] ** 2 + vel[b, 1] ** 2 + vel[b, 2] ** 2))
+        deepest = 0.0
         for c in range(n_col):
             if allowed[r, c] == 0:
                 continue
@@ -650,7 +654,17 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
                 continue
             wa = 1.0 - s
             wb = s
-            excess = radius - sd - max(wa * pen[a, c] + wb * pen[b, c], 0.0)
+            # (an end that touches nothing counts as not inside: with its -1e30 in the mean,
+            # the segment next to a node resting on a curve took that node's whole depth again
+            # when its other neighbour lifted off, and kicked it out at 4 m/s)
+            excess = radius - sd - (wa * max(pen[a, c], 0.0) + wb * max(pen[b, c], 0.0))
+            if excess <= 0.0:
+                continue
+            # Less what a segment placed inside keeps, as a node does (across a box's edge,
+            # its end just past the edge touching nothing, a rope placed 3 mm inside was
+            # launched at 5-7 m/s while its nodes' offsets held).
+            deepest = max(deepest, excess)
+            excess -= start_offset(seg_off[e], excess, speed, h, V_OUT)
             if excess <= 0.0:
                 continue
             p = (wa * pa[0] + wb * pb[0], wa * pa[1] + wb * pb[1], wa * pa[2] + wb * pb[2])
@@ -703,4 +717,13 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
                     _add_K(el_K, e, 2, sa * sa, 0.0, kt, n)
         if commit and not anchored:
             anchor_col[slot] = -1
+        if commit:  # the segment's offset for the next step (kernels/verlet.py, _carry_offsets)
+            if deepest <= 0.0:
+                seg_off[e] = -1.0
+            elif seg_off[e] < 0.0:
+                seg_off[e] = start_offset(-1.0, deepest, speed, h, V_OUT)
+                if seg_off[e] > 0.0 and deepest > 0.2 * radius:
+                    rd.stats[r, 5] = max(rd.stats[r, 5], deepest)
+            else:
+                seg_off[e] = max(min(seg_off[e], deepest) - V_OUT * h, 0.0)
     return count

@@ -37,7 +37,8 @@ from .banded import BLOCK_BAND
 # the stable integrator's step start, the state its last step ended in (second-order steps
 # use the step before only if nothing changed the state since), predictor rates, viscous
 # loads, contact planes and
-# friction anchors, rod-rod contact offsets, the explicit integrator's start-inside offsets,
+# friction anchors, rod-rod contact offsets, the explicit integrator's start-inside offsets
+# (nodes, segments),
 # last step, contraction rate and contact count; the rod-rod
 # Verlet list's reference positions and (pairs, valid, builds, touching).
 ROD_ARRAYS = (
@@ -48,7 +49,8 @@ ROD_ARRAYS = (
     ('e33', 'f', (4, 'E', 3, 3), ('Q', 'Qn', 'Qe', 'Qh'), 3),
     ('v3', 'f', (6, 'V', 3), ('B', 'rest_kappa', 'kappa', 'couple', 'scr_C', 'scr_X'), 0),
     ('n1', 'f', (4, 'N'), ('pen_off', 'mass', 'node_radius', 'node_kmin'), 1),
-    ('e1', 'f', (5, 'E'), ('pair_off', 'rest_len', 'seg_radius', 'dil', 'scr_edot'), 1),
+    ('e1', 'f', (7, 'E'),
+     ('pair_off', 'seg_off', 'rest_len', 'seg_radius', 'dil', 'scr_edot', 'scr_off'), 2),
     ('v1', 'f', (1, 'V'), ('rest_vor',), 0),
     ('r1', 'f', (11, 'R'), ('h_prev', 'rate', 'contacts', 'decay', 'nu', 'tau', 'times',
                             'coupled', 'fact_h', 'fact_age', 'first_upd'), 3),
@@ -81,7 +83,7 @@ ROD_ARRAYS = (
 E_Q, E_QN, E_QE, E_QH = 0, 1, 2, 3
 V_B, V_REST_KAPPA, V_KAPPA, V_COUPLE, V_SCR_C, V_SCR_X = 0, 1, 2, 3, 4, 5
 N_PEN_OFF, N_MASS, N_NODE_RADIUS, N_NODE_KMIN = 0, 1, 2, 3
-E_PAIR_OFF, E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT = 0, 1, 2, 3, 4
+E_PAIR_OFF, E_SEG_OFF, E_REST_LEN, E_SEG_RADIUS, E_DIL, E_SCR_EDOT, E_SCR_OFF = range(7)
 V_REST_VOR = 0
 R_H_PREV, R_RATE, R_CONTACTS, R_DECAY, R_NU, R_TAU, R_TIMES, R_COUPLED = 0, 1, 2, 3, 4, 5, 6, 7
 # The stable integrator's Newton factor in the rod's rows of sys_A: the step it was made for
