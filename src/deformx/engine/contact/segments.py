@@ -488,6 +488,16 @@ def _add_K(el_K, e, q, w, kn, kt, n):
             el_K[e, q, i, j] += w * ((kn - kt) * n[i] * n[j] + (kt if i == j else 0.0))
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _kept_depth(pen, carried, vel, i, h):
+    """The depth (m) node ``i``'s contact force acts on: its penetration ``pen`` (-1e30: no
+    contact) less the start offset it keeps (explicit integrator)."""
+    if pen <= 0.0:
+        return 0.0
+    speed = math.sqrt(vel[i, 0] ** 2 + vel[i, 1] ** 2 + vel[i, 2] ** 2)
+    return max(pen - start_offset(carried, pen, speed, h, V_OUT), 0.0)
+
+
 @njit(cache=True, error_model="numpy")
 def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, cols, commit,
                           want_K) -> int:
@@ -654,17 +664,17 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
                 continue
             wa = 1.0 - s
             wb = s
-            # (an end that touches nothing counts as not inside: with its -1e30 in the mean,
-            # the segment next to a node resting on a curve took that node's whole depth again
-            # when its other neighbour lifted off, and kicked it out at 4 m/s)
-            excess = radius - sd - (wa * max(pen[a, c], 0.0) + wb * max(pen[b, c], 0.0))
-            if excess <= 0.0:
-                continue
-            # Less what a segment placed inside keeps, as a node does (across a box's edge,
-            # its end just past the edge touching nothing, a rope placed 3 mm inside was
-            # launched at 5-7 m/s while its nodes' offsets held).
-            deepest = max(deepest, excess)
-            excess -= start_offset(seg_off[e], excess, speed, h, V_OUT)
+            # What the segment's depth, less what a segment placed inside keeps (as a node
+            # does), exceeds over its ends' depths, less theirs. (Across a box's edge, its end
+            # past the edge touching nothing, a rope placed 3 mm inside was launched at 5-7 m/s
+            # while its nodes' offsets held; an end that touches nothing counts as not inside:
+            # with its -1e30 in the mean, the segment next to a node resting on a curve took
+            # that node's whole depth again when its other neighbour lifted off.)
+            depth = radius - sd
+            deepest = max(deepest, depth)
+            excess = (depth - start_offset(seg_off[e], depth, speed, h, V_OUT)
+                      - wa * _kept_depth(pen[a, c], pen_off[a], vel, a, h)
+                      - wb * _kept_depth(pen[b, c], pen_off[b], vel, b, h))
             if excess <= 0.0:
                 continue
             p = (wa * pa[0] + wb * pb[0], wa * pa[1] + wb * pb[1], wa * pa[2] + wb * pb[2])
