@@ -113,7 +113,7 @@ class World:
         self._drivers = DriverTable()
         self._pairs = np.zeros((64, 2), dtype=np.int64)
         self._args: tuple | None = None  # the kernel's arguments but the last two, one group
-        self._deep_warned: set[int] = set()
+        self._deep_warned: set[tuple[int, int]] = set()  # (stats column, rod)
 
     # ------------------------------------------------------------------ building
     @property
@@ -519,16 +519,18 @@ class World:
         return out
 
     def _warn_deep(self) -> None:
-        """One warning per rod found deeper inside a collider or plane than a step resolves
-        (it is pushed out at no more than 0.1 m/s; see contact/speculative.py)."""
-        deep = self._rods_p["stats"][:, 5]
-        for r in np.flatnonzero(deep > 0.0):
-            if r not in self._deep_warned:
-                self._deep_warned.add(int(r))
-                _log.warning("rod %d is %.3g m inside a collider or plane at t = %.4g s (more "
-                             "than a step resolves): pushing it out at <= %g m/s", r,
-                             deep[r], self.time, V_OUT)
-        deep[:] = 0.0
+        """One warning per rod found deeper inside a collider or plane, and one per rod
+        found deeper inside another rod, than a step resolves (it is pushed out at no more
+        than 0.1 m/s; see contact/speculative.py)."""
+        for column, what in ((5, "a collider or plane"), (9, "another rod")):
+            deep = self._rods_p["stats"][:, column]
+            for r in np.flatnonzero(deep > 0.0):
+                if (column, int(r)) not in self._deep_warned:
+                    self._deep_warned.add((column, int(r)))
+                    _log.warning("rod %d is %.3g m inside %s at t = %.4g s (more than a step "
+                                 "resolves): pushing it out at <= %g m/s", r, deep[r], what,
+                                 self.time, V_OUT)
+            deep[:] = 0.0
 
     def _advance_threaded(self, n_steps: int) -> int:
         """Groups of rods on threads (each with its own copy of the drivers); returns the

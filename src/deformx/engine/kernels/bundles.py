@@ -60,7 +60,7 @@ ROD_ARRAYS = (
                           'excluded'), 0),
     ('ri', 'i', (6, 'R'), ('node0', 'elem0', 'vor0', 'ne', 'closed', 'group'), 0),
     ('pair_state', 'i', (4,), None, 1),
-    ('stats', 'f', ('R', 9), None, 0),
+    ('stats', 'f', ('R', 10), None, 0),
     ('sp_f', 'f', ('Q', 2, 21), None, 1),
     # Per element: contact stiffness blocks a-a, b-a, b-b (symmetric), then the friction's
     # coupling to the normal force a-a, a-b, b-a, b-b (nonsymmetric; row-column).

@@ -69,7 +69,8 @@ NOT_CONVERGED = 4  # status code: Newton failed even on dt / MAX_REFINE sub-step
 # stats per rod (bundles' ``stats``): steps, Newton iterations, sub-steps at the iteration cap,
 # last relative update, step halvings, the deepest start penetration, BDF2 steps retried by
 # backward Euler, steps started from an earlier step's factor, steps retried without the
-# shortcuts below (quadratic stop, fresh second factor).
+# shortcuts below (quadratic stop, fresh second factor), the deepest start overlap with another
+# rod (m; both warned about by the world).
 CHORD_RATE = 0.1  # reuse the factor while each update is below this fraction of the last
 REUSE_STEPS = 20.0  # a calm step may start from the factor of up to this many steps before
 # An update made with an earlier step's factor is accepted within this fraction of the

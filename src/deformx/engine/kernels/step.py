@@ -29,7 +29,8 @@ from .verlet import OK, advance_rods
 def _finish(t, sim, opts, rd, env, cols, drv):
     """Drivers back from the rods' copies and the time into ``sim`` (one group: groups on
     threads leave both to the caller); ``opts[OPT_FLAG]``: the rod that failed first, else -2
-    if a rod is found deep inside a collider (``stats[r, 5]``, warned about in Python), else
+    if a rod is found deep inside a collider or another rod (``stats[r, 5]``, ``stats[r,
+    9]``, warned about in Python), else
     -1. Returns whether the caller must look (flag not -1)."""
     r0, r1 = opts[OPT_R0], opts[OPT_R1]
     bad = -1
@@ -38,7 +39,7 @@ def _finish(t, sim, opts, rd, env, cols, drv):
             bad = r
     if bad < 0:
         for r in range(r0, r1):
-            if rd.stats[r, 5] != 0.0:
+            if rd.stats[r, 5] != 0.0 or rd.stats[r, 9] != 0.0:
                 bad = -2
                 break
     if opts[OPT_STORE]:
