@@ -176,3 +176,30 @@ def test_ropes_placed_inside_each_other_come_apart_without_launch(depth, integra
     assert warnings == ["rod 0", "rod 1"]
     assert top <= 0.5
     assert _worst_gap([a, b], radius) >= -0.05 * radius  # apart by now
+
+
+@pytest.mark.parametrize("integrator, dt, substeps", [("stable", DT, 1), ("verlet", 2e-5, 500)])
+def test_rope_laid_through_itself_comes_apart_without_launch(integrator, dt, substeps, caplog):
+    """A rope laid as a loop whose end crosses its start a whole radius too low (self-contact
+    placed inside) comes apart at the push-out speed, and the world says so once."""
+    radius = 0.004
+    th = np.linspace(-np.pi / 2, 1.5 * np.pi, 60)
+    loop = np.stack([0.06 * np.cos(th), 0.06 + 0.06 * np.sin(th), np.zeros_like(th)], 1)
+    lead = np.stack([np.linspace(-0.2, 0.0, 21)[:-1], np.zeros(20), np.zeros(20)], 1)
+    tail = np.stack([np.linspace(0.0, 0.2, 21)[1:], np.zeros(20), np.zeros(20)], 1)
+    P = np.concatenate([lead, loop, tail])
+    P[65:, 2] = radius  # the loop's end runs over the lead-in, axes one radius apart
+    world = dx.World(dt=dt, integrator=integrator, gravity=(0, 0, 0))
+    rod = world.add_rod(dx.Rod.from_points(P, radius=radius, youngs_modulus=1e6,
+                                           density=1000.0, damping=2.0))
+    top = 0.0
+    with caplog.at_level(logging.WARNING, logger="deformx"):
+        for _ in range(50):
+            world.step(substeps)
+            top = max(top, float(np.abs(rod.velocities).max()))
+    assert [rec.message.split(" is ")[0] for rec in caplog.records
+            if "inside another rod or itself" in rec.message] == ["rod 0"]
+    assert top <= 0.5
+    Q = rod.positions
+    gaps = segment_distances(Q[:20], Q[66:]) - 2 * radius  # lead-in against the loop's end
+    assert gaps.min() >= -0.05 * radius  # apart by now

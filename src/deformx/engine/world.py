@@ -522,7 +522,7 @@ class World:
         """One warning per rod found deeper inside a collider or plane, and one per rod
         found deeper inside another rod, than a step resolves (it is pushed out at no more
         than 0.1 m/s; see contact/speculative.py)."""
-        for column, what in ((5, "a collider or plane"), (9, "another rod")):
+        for column, what in ((5, "a collider or plane"), (9, "another rod or itself")):
             deep = self._rods_p["stats"][:, column]
             for r in np.flatnonzero(deep > 0.0):
                 if (column, int(r)) not in self._deep_warned:
