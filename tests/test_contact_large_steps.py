@@ -182,8 +182,8 @@ def test_explicit_rope_starting_inside_a_cylinder_is_not_kicked(depth):
 @pytest.mark.slow
 @pytest.mark.parametrize("shift", [0.0005, 0.002, 0.005])
 def test_explicit_rope_starting_inside_a_box_elsewhere_is_not_launched(shift):
-    """The box case from 0.5-5 mm further along: 1.0 and 0.7 m/s at 0.5 and 2 mm while a
-    segment's share of the depth was offset on its own and its nodes' on theirs."""
+    """The box case from 0.5-5 mm further along (before, 2-7.5 m/s; 1.0 and 0.7 m/s at 0.5
+    and 2 mm while a segment's excess over its nodes was offset on its own, not its depth)."""
     r = 0.005
     world = dx.World(dt=2e-5, integrator="verlet", rod_contact=False)
     mesh = trimesh.creation.box(extents=(0.3, 0.3, 0.1))
