@@ -36,10 +36,10 @@ from numba import njit
 
 from ..geometry.closest import closest_segment_segment
 from ..kernels.bundles import (
-    E_PAIR_OFF, E_SEG_A, E_SEG_B, E_SEG_RADIUS, E_SEG_ROD, N_CONTACT_FORCE, N_FORCE, N_MASS,
+    E_PAIR_OFF, E_SEG_A, E_SEG_B, E_SEG_RADIUS, N_CONTACT_FORCE, N_FORCE, N_MASS,
     N_NODE_KMIN,
 )
-from .rodrod import START_DEEP, pair_penalty
+from .rodrod import note_start_overlap, pair_penalty
 from .speculative import (ACTIVE, INACTIVE, MARGIN, MAX_KMUL, PAIR_FLIPS, REFIND_DEPTH,
                           STIFFEN_DEPTH, V_OUT, switch_active)
 from ..kernels.refcount import NO_REFCOUNT
@@ -83,7 +83,7 @@ def pair_plane(p, pairs, rd, X, Xp, h, rr, pp, ps) -> None:
     """Separating plane of pair ``p`` at the (sub-)step start ``X`` (``Xp``: predicted end, for
     the margin): closest-point parameters, normal, start penetration, offset, near flag."""
     seg_a, seg_b, radius = rd.ei[E_SEG_A], rd.ei[E_SEG_B], rd.e1[E_SEG_RADIUS]
-    seg_rod, off_e = rd.ei[E_SEG_ROD], rd.e1[E_PAIR_OFF]
+    off_e = rd.e1[E_PAIR_OFF]
     i, j = pairs[p, 0], pairs[p, 1]
     a, b, c, d = seg_a[i], seg_b[i], seg_a[j], seg_b[j]
     p0, p1 = (X[a, 0], X[a, 1], X[a, 2]), (X[b, 0], X[b, 1], X[b, 2])
@@ -113,9 +113,8 @@ def pair_plane(p, pairs, rd, X, Xp, h, rr, pp, ps) -> None:
     carried = min(off_e[i], off_e[j])
     off = min(carried, d0) if carried >= 0.0 else d0
     pp[p, PP_OFF] = max(off - V_OUT * h, 0.0)
-    if carried < 0.0 and d0 > START_DEEP * min(radius[i], radius[j]):  # placed inside: say so
-        for e in (i, j):
-            rd.stats[seg_rod[e], 9] = max(rd.stats[seg_rod[e], 9], d0)
+    if carried < 0.0:  # a new contact: placed inside?
+        note_start_overlap(rd, i, j, d0, d0)
     # Friction is bounded by the normal force at the step start (lagged, as in IPC): Newton
     # then sees no coupling of friction to the normal motion, which it cannot represent.
     kc, _ = _law(rd, a, b, c, d, s, t, min(h, 1e-4), rr)

@@ -32,6 +32,18 @@ def start_offset(carried, depth, speed, dt, v_out):
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def carry_offset(carried, depth, speed2, dt, v_out):
+    """The offset (m) a node or segment at ``depth`` (<= 0: out of contact, then -1) keeps
+    next step: from the one it ``carried`` (-1: none; then what :func:`start_offset` finds at
+    the squared speed ``speed2``), never more than ``depth``, less ``v_out dt``."""
+    if depth <= 0.0:
+        return -1.0
+    if carried < 0.0:
+        return start_offset(-1.0, depth, math.sqrt(speed2), dt, v_out)
+    return max(min(carried, depth) - v_out * dt, 0.0)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def plane_penalty(planes, p, mass, k_floor, dt_ref):
     """Penalty stiffness (N/m) and damping (N s/m) of plane ``p`` for a node of ``mass``.
 

@@ -158,6 +158,17 @@ def max_displacement(pos, ref, nodes) -> float:
 START_DEEP = 0.2
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def note_start_overlap(rd, i, j, kept, depth) -> None:
+    """Elements ``i`` and ``j`` found ``depth`` (m) inside each other at their first step of
+    contact, of which ``kept`` cannot be an approach: beyond ``START_DEEP`` of the thinner
+    radius their rods get the world's warning (``stats[r, 9]``, the deepest such)."""
+    radius, seg_rod = rd.e1[E_SEG_RADIUS], rd.ei[E_SEG_ROD]
+    if kept > START_DEEP * min(radius[i], radius[j]):
+        for e in (i, j):
+            rd.stats[seg_rod[e], 9] = max(rd.stats[seg_rod[e], 9], depth)
+
+
 @njit(cache=True, error_model="numpy")
 def pair_penalty(m_i, m_j, k_floor, dt_ref, stiffness, damping):
     """Penalty stiffness (N/m) and damping (N s/m) of one rod-rod contact (automatic when
@@ -240,7 +251,7 @@ def pair_forces(pairs, n_pairs, rd, pos, vel, dt_ref, rr, out) -> int:
     placed inside each other come apart at ``V_OUT`` instead of being launched (5.8 and 10 m/s
     at half and a whole radius before)."""
     seg_a, seg_b, radius, mass, node_kmin = rd.ei[E_SEG_A], rd.ei[E_SEG_B], rd.e1[E_SEG_RADIUS], rd.n1[N_MASS], rd.n1[N_NODE_KMIN]
-    off_e, new_off, seg_rod = rd.e1[E_PAIR_OFF], rd.e1[E_SCR_OFF], rd.ei[E_SEG_ROD]
+    off_e, new_off = rd.e1[E_PAIR_OFF], rd.e1[E_SCR_OFF]
     stiffness, damping, mu = rr[0], rr[1], rr[2]
     for e in range(new_off.shape[0]):
         new_off[e] = -1.0
@@ -251,9 +262,8 @@ def pair_forces(pairs, n_pairs, rd, pos, vel, dt_ref, rr, out) -> int:
                                                          vel, vel, mass, node_kmin, dt_ref,
                                                          stiffness, damping, mu, off_e)
         if depth > 0.0:
-            if off > START_DEEP * min(radius[i], radius[j]) and min(off_e[i], off_e[j]) < 0.0:
-                for e in (i, j):  # placed inside: the world warns
-                    rd.stats[seg_rod[e], 9] = max(rd.stats[seg_rod[e], 9], depth)
+            if min(off_e[i], off_e[j]) < 0.0:  # a new contact: placed inside?
+                note_start_overlap(rd, i, j, off, depth)
             kept = max(off - V_OUT * dt_ref, 0.0)
             new_off[i] = max(new_off[i], kept)
             new_off[j] = max(new_off[j], kept)

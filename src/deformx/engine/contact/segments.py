@@ -35,7 +35,7 @@ from numba import njit
 from ..geometry.bvh import _box_gap2, closest_segment_search, nearest_k_search, signed_side
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from ..kernels.refcount import NO_REFCOUNT
-from .plane import V_OUT, start_offset
+from .plane import V_OUT, carry_offset, start_offset
 from .primitives import bounding_gap, segment_deepest, shape_sdf
 from ..kernels.bundles import (
     E_SEG_OFF,
@@ -728,12 +728,8 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
         if commit and not anchored:
             anchor_col[slot] = -1
         if commit:  # the segment's offset for the next step (kernels/verlet.py, _carry_offsets)
-            if deepest <= 0.0:
-                seg_off[e] = -1.0
-            elif seg_off[e] < 0.0:
-                seg_off[e] = start_offset(-1.0, deepest, speed, h, V_OUT)
-                if seg_off[e] > 0.0 and deepest > 0.2 * radius:
-                    rd.stats[r, 5] = max(rd.stats[r, 5], deepest)
-            else:
-                seg_off[e] = max(min(seg_off[e], deepest) - V_OUT * h, 0.0)
+            kept = carry_offset(seg_off[e], deepest, speed * speed, h, V_OUT)
+            if seg_off[e] < 0.0 and kept > 0.0 and deepest > 0.2 * radius:
+                rd.stats[r, 5] = max(rd.stats[r, 5], deepest)
+            seg_off[e] = kept
     return count

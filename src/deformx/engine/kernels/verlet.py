@@ -15,7 +15,8 @@ import math
 
 from numba import njit
 
-from ..contact.plane import V_OUT, plane_contact_node, plane_penalty, start_offset
+from ..contact.plane import (V_OUT, carry_offset, plane_contact_node, plane_penalty,
+                             start_offset)
 from ..contact.segments import rod_collider_contacts
 from .bundles import (
     D_W, E_DIL, E_INV_J, E_J, E_OMEGA, E_Q, E_TEXT, E_TORQUE, N_CONTACT_FORCE, N_EXTRA, N_FEXT,
@@ -251,15 +252,11 @@ def _carry_offsets(r, n0, nn, planes, pos, vel, node_radius, pen_off, dt, cols, 
         if cols is not None:
             for c in range(cols.kind.shape[0]):
                 depth = max(depth, cols.pen[i, c])
-        if depth <= 0.0:
-            pen_off[i] = -1.0
-        elif pen_off[i] < 0.0:
-            speed = math.sqrt(vel[i, 0] ** 2 + vel[i, 1] ** 2 + vel[i, 2] ** 2)
-            pen_off[i] = start_offset(-1.0, depth, speed, dt, V_OUT)
-            if pen_off[i] > 0.0 and depth > 0.2 * radius:
-                stats[r, 5] = max(stats[r, 5], depth)
-        else:
-            pen_off[i] = max(min(pen_off[i], depth) - V_OUT * dt, 0.0)
+        kept = carry_offset(pen_off[i], depth, vel[i, 0] ** 2 + vel[i, 1] ** 2 + vel[i, 2] ** 2,
+                            dt, V_OUT)
+        if pen_off[i] < 0.0 and kept > 0.0 and depth > 0.2 * radius:
+            stats[r, 5] = max(stats[r, 5], depth)
+        pen_off[i] = kept
 
 
 @njit(cache=True, error_model="numpy")
