@@ -277,6 +277,50 @@ def test_rope_dragged_a_little_slower_or_faster_neither_tunnels_nor_halves(kind,
     assert world.solver_stats()["halvings"] < 1
 
 
+def _pushed_along_the_floor(shape: str, speed: float):
+    """A 5 mm rope lying on the floor along y, a 3 cm shape lying beside it driven into it
+    along x at ``speed`` (m/s) for 0.3 s; returns the world, the rope, its deepest point in
+    the floor and in the shape (m, analytic distances) and the shape's final x (m)."""
+    r = 0.005
+    world = dx.World(dt=DT, integrator="stable", rod_contact=False)
+    world.add_plane(friction=0.5)
+    rope = world.add_rod(dx.Rod.straight(n_elements=40, start=(0.0, -0.2, r), direction=(0, 1, 0),
+                                         length=0.4, radius=r, density=1000.0,
+                                         youngs_modulus=1e6, damping=1.0))
+    R = np.array([[1.0, 0, 0], [0, 0, -1.0], [0, 1.0, 0]])  # axis along y
+    if shape == "cylinder":
+        body = world.add_cylinder(radius=0.03, length=0.6, pose=((-0.065, 0.0, 0.03), R),
+                                  friction=0.5)
+    else:
+        body = world.add_capsule(radius=0.03, length=0.6, pose=((-0.065, 0.0, 0.03), R),
+                                 friction=0.5)
+    body.set_velocity((speed, 0.0, 0.0))
+    floor = shape_depth = -np.inf
+    for _ in range(30):
+        world.step()
+        Q = _segment_points(rope.positions)
+        c = body.position
+        floor = max(floor, r - Q[:, 2].min())  # (both shapes are 0.6 m long: no end reached)
+        shape_depth = max(shape_depth, r - (np.hypot(Q[:, 0] - c[0], Q[:, 2] - c[2]) - 0.03).min())
+    return world, rope, floor, shape_depth, body.position[0]
+
+
+@pytest.mark.parametrize("speed", [1.0, 2.0])
+@pytest.mark.parametrize("shape", ["cylinder", "capsule"])
+def test_shape_pushing_a_rope_along_the_floor_keeps_it_out_of_both(shape, speed):
+    """A robot link's case: a shape sweeping a rope along the table. For a fast node a shape
+    gives two planes (the nearest, and the one where it is headed); they crowded the floor's
+    plane out of the node's two, and the rope sank 24 % (1 m/s) and 75 % (2 m/s) of its radius
+    into the floor in one step."""
+    world, rope, floor, shape_depth, x = _pushed_along_the_floor(shape, speed)
+    r = rope.radius
+    assert floor <= 0.2 * r, f"{floor / r:.0%} of the radius into the floor"
+    assert shape_depth <= 0.2 * r, f"{shape_depth / r:.0%} of the radius into the {shape}"
+    assert rope.positions[:, 0].min() > x  # carried ahead of it
+    assert np.abs(rope.velocities[:, 0].mean() - speed) < 0.1 * speed
+    assert world.solver_stats()["halvings"] < 1
+
+
 # ------------------------------------------------------------------ bad inputs
 def _write(path, data: bytes):
     path.write_bytes(data)

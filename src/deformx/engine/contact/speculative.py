@@ -173,9 +173,37 @@ def _surface_velocity(src, n_planes, pose, twist, q):
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
-def _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, src, gap, q, n, s, pose, n_planes):
-    """Offer a plane of ``src`` (gap in m, point q and normal n in the world) to ``slot``:
-    the ``SP_K`` nearest are kept (``keep_*`` holds the candidates)."""
+def _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, src, gap, q, n, s, pose, n_planes,
+           radius):
+    """Offer a plane of ``src`` (gap in m, point q and normal n in the world) to ``slot`` of
+    ``radius`` (m): the ``SP_K`` nearest are kept (``keep_*`` holds the candidates, nearest
+    first), a source's second plane counted a radius farther than it is.
+
+    (A shape gives a fast node two planes, the nearest and the one where it is headed: a rope
+    on the floor pushed by a cylinder lying on it would otherwise lose the floor's plane to
+    them and sink 75 % of its radius into the floor in one step.)"""
+    full = True
+    for j in range(SP_K):
+        full = full and keep_src[j] >= 0
+    if full:
+        # drop the least relevant of the kept planes and the offered one
+        drop, drop_gap = SP_K, gap + (radius if _nearer_twin(keep_src, keep_f, SP_K, src, gap)
+                                      else 0.0)
+        for j in range(SP_K):
+            gj = keep_f[j]
+            if (src == keep_src[j] and gap < gj) or _nearer_twin(keep_src, keep_f, j,
+                                                                 keep_src[j], gj):
+                gj += radius
+            if gj > drop_gap:
+                drop, drop_gap = j, gj
+        if drop == SP_K:
+            return
+        for j in range(drop, SP_K - 1):
+            keep_src[j] = keep_src[j + 1]
+            keep_f[j] = keep_f[j + 1]
+            for d in range(8):
+                keep_n[j, d] = keep_n[j + 1, d]
+        keep_src[SP_K - 1] = -1
     k = -1
     for j in range(SP_K):
         if keep_src[j] < 0 or gap < keep_f[j]:
@@ -196,6 +224,15 @@ def _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, src, gap, q, n, s, pose, 
         keep_n[k, d] = lq[d]
         keep_n[k, 3 + d] = ln[d]
     keep_n[k, 6] = s
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _nearer_twin(keep_src, keep_f, j, src, gap):
+    """Whether a kept plane other than ``j`` of the same source is nearer than ``gap`` (m)."""
+    for i in range(SP_K):
+        if i != j and keep_src[i] == src and (keep_f[i] < gap or (keep_f[i] == gap and i < j)):
+            return True
+    return False
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
@@ -315,7 +352,7 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                     q = (pa[0] - (gap + radius) * planes[p, 3], pa[1] - (gap + radius) * planes[p, 4],
                          pa[2] - (gap + radius) * planes[p, 5])
                     _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, p, gap, q,
-                           (planes[p, 3], planes[p, 4], planes[p, 5]), 0.0, pose3, n_planes)
+                           (planes[p, 3], planes[p, 4], planes[p, 5]), 0.0, pose3, n_planes, radius)
         if cols is not None:
             pose, twist = cols.pose[r], cols.twist[r]
             for c in range(n_cols):
@@ -346,11 +383,11 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                     sdb = _shape_closest(c, cols.kind[c], pose, cols.par, pb, pb, math.inf)[2]
                     if hm and 0.5 * (sda + sdb) - sdm > SAG * radius:
                         _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c,
-                               sdm - radius, qm, nm, 0.5, pose, n_planes)
+                               sdm - radius, qm, nm, 0.5, pose, n_planes, radius)
                 if not node and (s <= 0.0 or s >= 1.0):
                     continue  # a segment's end: the node carries it
                 _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c, sd - radius,
-                       q, n, s, pose, n_planes)
+                       q, n, s, pose, n_planes, radius)
                 if node and cols.kind[c] != MESH and speed * h > 0.5 * radius:
                     # A fast node on a curved shape: also the tangent plane where it is headed
                     # (its free-flight end point), so that it cannot cut through the curve.
@@ -361,7 +398,7 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                         gap = ((pa[0] - q[0]) * m[0] + (pa[1] - q[1]) * m[1]
                                + (pa[2] - q[2]) * m[2]) - radius
                         _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c, gap,
-                               q, m, 0.0, pose, n_planes)
+                               q, m, 0.0, pose, n_planes, radius)
         if keep_src[0] < 0 and sp_i[slot, 0, SP_SRC] < 0 and sp_i[slot, 1, SP_SRC] < 0:
             continue  # empty and staying so (an empty slot's other fields are never read)
         s0 = 0.0
