@@ -94,6 +94,11 @@ REFIND_DEPTH = 0.1
 REFIND_MOVE = 0.03  # ... unless it moved less than this many radii along each axis in the step
 # The automatic penalty stops an impact at this speed (m/s) within this fraction of the radius.
 V_IMPACT, IMPACT_DEPTH = 5.0, 0.1
+# A node within this many radii of a shape touches it (no plane where it is headed while the
+# shape presses on it: its relative velocity points into the surface by more than PRESSED of
+# its speed); a moving shape's plane where a node's flight first touches it is found to within
+# that distance, in at most HEADED_ITERS steps.
+HEADED_TOUCH, PRESSED, HEADED_ITERS = 0.02, 0.3, 16
 MARGIN = 2.0  # the speculative margin is this many times the step's relative travel
 # The friction's coupling to the normal force enters the Newton matrix where it is at least
 # this fraction of mu times the normal stiffness (sliding, not sticking).
@@ -311,6 +316,30 @@ def _closest(cols, r, c, pose, slot, pa, pb, reach, lasting):
     return _shape_closest(c, cols.kind[c], pose, cols.par, pa, pb, reach)
 
 
+@njit(cache=True, error_model="numpy")
+def _headed_plane(c, kind, pose, par, pa, pe, sd0, radius, reach, first_hit):
+    """The tangent plane of shape ``c`` where a node of ``radius`` (m) flying from ``pa`` to
+    ``pe`` (world points, the flight relative to the shape) is headed: nearest ``pe``; with
+    ``first_hit``, where the flight first touches the shape if it does (``sd0``: the centre's
+    signed distance at ``pa``), found by conservative advancement (a signed distance changes no
+    faster than the point moves). Returns as ``_shape_closest``."""
+    d0, d1, d2 = pe[0] - pa[0], pe[1] - pa[1], pe[2] - pa[2]
+    length = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    f = sd0 - radius
+    if first_hit and length > 0.0:
+        t = 0.0
+        for _ in range(HEADED_ITERS):
+            t += f / length
+            if t >= 1.0:
+                break
+            p = (pa[0] + t * d0, pa[1] + t * d1, pa[2] + t * d2)
+            hit, s, sd, m, q = _shape_closest(c, kind, pose, par, p, p, math.inf)
+            f = sd - radius
+            if f <= HEADED_TOUCH * radius:
+                return hit, s, sd, m, q
+    return _shape_closest(c, kind, pose, par, pe, pe, reach)
+
+
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, sp_f, keep_src,
                   keep_f, keep_n, x_start) -> int:
@@ -388,12 +417,26 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                     continue  # a segment's end: the node carries it
                 _offer(sp_i, sp_f, slot, keep_src, keep_f, keep_n, n_planes + c, sd - radius,
                        q, n, s, pose, n_planes, radius)
-                if node and cols.kind[c] != MESH and speed * h > 0.5 * radius:
-                    # A fast node on a curved shape: also the tangent plane where it is headed
-                    # (its free-flight end point), so that it cannot cut through the curve.
-                    pe = (pa[0] + h * V[a, 0], pa[1] + h * V[a, 1], pa[2] + h * V[a, 2])
-                    hit, s, sd, m, q = _shape_closest(c, cols.kind[c], pose, cols.par, pe, pe,
-                                                      reach)
+                if not node or cols.kind[c] == MESH:
+                    continue
+                # A node moving fast over a curved shape: also the tangent plane where it is
+                # headed, so that it cannot cut through the curve. Its flight relative to the
+                # shape (from its speed in the world a rope carried along by a shape was held
+                # by a plane where it was not, half its radius inside the floor); none for a
+                # node the shape presses on (it is pushed, not flying: the plane nearest its
+                # flight's end, under a shape lying on the floor, pressed it into the floor).
+                vs = _surface_velocity(n_planes + c, n_planes, pose, twist, q)
+                rel = (V[a, 0] - vs[0], V[a, 1] - vs[1], V[a, 2] - vs[2])
+                rel_speed = math.sqrt(rel[0] ** 2 + rel[1] ** 2 + rel[2] ** 2)
+                touching = sd - radius <= HEADED_TOUCH * radius
+                if rel_speed * h > 0.5 * radius and not (
+                        touching and rel[0] * n[0] + rel[1] * n[1] + rel[2] * n[2]
+                        < -PRESSED * rel_speed):
+                    pe = (pa[0] + h * rel[0], pa[1] + h * rel[1], pa[2] + h * rel[2])
+                    sweeps = (twist[c, 0] != 0.0 or twist[c, 1] != 0.0 or twist[c, 2] != 0.0
+                              or twist[c, 3] != 0.0 or twist[c, 4] != 0.0 or twist[c, 5] != 0.0)
+                    hit, s, sd, m, q = _headed_plane(c, cols.kind[c], pose, cols.par, pa, pe,
+                                                     sd, radius, reach, sweeps and not touching)
                     if hit and m[0] * n[0] + m[1] * n[1] + m[2] * n[2] < 0.99:
                         gap = ((pa[0] - q[0]) * m[0] + (pa[1] - q[1]) * m[1]
                                + (pa[2] - q[2]) * m[2]) - radius
