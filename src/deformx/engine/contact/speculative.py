@@ -320,24 +320,28 @@ def _closest(cols, r, c, pose, slot, pa, pb, reach, lasting):
 def _headed_plane(c, kind, pose, par, pa, pe, sd0, radius, reach, first_hit):
     """The tangent plane of shape ``c`` where a node of ``radius`` (m) flying from ``pa`` to
     ``pe`` (world points, the flight relative to the shape) is headed: nearest ``pe``; with
-    ``first_hit``, where the flight first touches the shape if it does (``sd0``: the centre's
-    signed distance at ``pa``), found by conservative advancement (a signed distance changes no
-    faster than the point moves). Returns as ``_shape_closest``."""
+    ``first_hit``, where the flight first touches the shape (``sd0``: the centre's signed
+    distance at ``pa``), found by conservative advancement (a signed distance changes no
+    faster than the point moves), and none if it passes by (the plane nearest the end of a
+    flight past a box's corner put the node 2.4 radii behind it at the step start). Returns as
+    ``_shape_closest``."""
+    if not first_hit:
+        return _shape_closest(c, kind, pose, par, pe, pe, reach)
     d0, d1, d2 = pe[0] - pa[0], pe[1] - pa[1], pe[2] - pa[2]
     length = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
     f = sd0 - radius
-    if first_hit and length > 0.0:
-        t = 0.0
-        for _ in range(HEADED_ITERS):
-            t += f / length
-            if t >= 1.0:
-                break
-            p = (pa[0] + t * d0, pa[1] + t * d1, pa[2] + t * d2)
-            hit, s, sd, m, q = _shape_closest(c, kind, pose, par, p, p, math.inf)
-            f = sd - radius
-            if f <= HEADED_TOUCH * radius:
-                return hit, s, sd, m, q
-    return _shape_closest(c, kind, pose, par, pe, pe, reach)
+    t = 0.0
+    p = pa
+    for _ in range(HEADED_ITERS):
+        t += f / length
+        if t >= 1.0:
+            return False, 0.0, 0.0, (0.0, 0.0, 1.0), (0.0, 0.0, 0.0)
+        p = (pa[0] + t * d0, pa[1] + t * d1, pa[2] + t * d2)
+        hit, s, sd, m, q = _shape_closest(c, kind, pose, par, p, p, math.inf)
+        f = sd - radius
+        if f <= HEADED_TOUCH * radius:
+            break
+    return _shape_closest(c, kind, pose, par, p, p, math.inf)  # (where the search ended)
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
