@@ -104,6 +104,22 @@ def _dropped_across_stays_on_top(radius, E, height):
 @pytest.mark.parametrize("seed", [3, 2, 4] + [pytest.param(s, marks=pytest.mark.slow)
                                               for s in (0, 1, 5, 6, 7, 8, 9, 10, 11, 12, 13)])
 def test_pile_of_eight_ropes_keeps_every_gap_and_the_order_they_fell_in(seed, caplog):
+    world, rods = _pile(seed, 2.0, caplog)
+    assert world.solver_stats()["halvings"] < 1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(14))
+def test_pile_of_less_damped_ropes_keeps_every_gap_and_the_order_they_fell_in(seed, caplog):
+    """The benchmark's ropes (damping 1): seed 11 ended a step 23 % of r inside another rope
+    while a pair's penalty could be doubled twice a step (three times now). (Seeds 1 and 5
+    halve one step in 100 here: not asserted.)"""
+    _pile(seed, 1.0, caplog)
+
+
+def _pile(seed, damping, caplog):
+    """Eight ropes dropped from 3-31 cm onto each other and the floor, 100 steps; asserts the
+    gaps, the order and no start warnings; returns the world and the ropes."""
     radius = 0.004
     world = dx.World(dt=DT, integrator="stable")
     world.add_plane(friction=0.5)
@@ -113,7 +129,8 @@ def test_pile_of_eight_ropes_keeps_every_gap_and_the_order_they_fell_in(seed, ca
         a = rng.uniform(0.0, np.pi)
         d = np.array([np.cos(a), np.sin(a), 0.0])
         c = rng.uniform(-0.03, 0.03, 3) * [1, 1, 0]
-        rods.append(world.add_rod(_rope(c - 0.2 * d + [0, 0, 0.03 + 0.04 * k], d, radius, 1e6)))
+        rods.append(world.add_rod(_rope(c - 0.2 * d + [0, 0, 0.03 + 0.04 * k], d, radius, 1e6,
+                                        damping=damping)))
     worst = np.inf
     with caplog.at_level(logging.WARNING, logger="deformx"):
         for _ in range(100):
@@ -121,7 +138,6 @@ def test_pile_of_eight_ropes_keeps_every_gap_and_the_order_they_fell_in(seed, ca
             worst = min(worst, _worst_gap(rods, radius))
     assert not caplog.records  # ropes landing on ropes were not placed inside them
     assert worst >= -0.2 * radius, f"surfaces overlapped by {-worst / radius:.0%} of r"
-    assert world.solver_stats()["halvings"] < 1
     # Wherever two ropes cross, the one dropped from higher lies above.
     checked = 0
     for i in range(8):
@@ -132,6 +148,7 @@ def test_pile_of_eight_ropes_keeps_every_gap_and_the_order_they_fell_in(seed, ca
                 assert z[1] > z[0] + radius, f"rope {j} ended below rope {i}"
     assert checked >= 10
     assert min(r.positions[:, 2].min() for r in rods) > 0.8 * radius
+    return world, rods
 
 
 def test_rods_in_contact_conserve_momentum():
