@@ -943,6 +943,16 @@ def freeze_friction_bounds(n0, nn, e0, ne, n_nodes, n_planes, sp_i, sp_f) -> int
 
 
 @njit(cache=True, error_model="numpy", **NO_REFCOUNT)
+def unfreeze_friction_bounds(n0, nn, e0, ne, n_nodes, sp_i, sp_f) -> None:
+    """Let the friction bounds fixed by ``freeze_friction_bounds`` follow the normal force
+    again (after contacts were stiffened: the forces they were fixed at are gone)."""
+    for k in range(nn + ne):
+        slot = n0 + k if k < nn else n_nodes + e0 + k - nn
+        for j in range(SP_K):
+            sp_f[slot, j, SP_FROZEN] = -1.0
+
+
+@njit(cache=True, error_model="numpy", **NO_REFCOUNT)
 def stiffen_deep(n0, nn, e0, ne, n_nodes, planes, rd, cols, sp_i, sp_f) -> int:
     """At a (nearly) converged iterate: stiffen the automatic penalty of each pushing plane
     whose point is deeper than ``STIFFEN_DEPTH`` of its radius (a segment's point counted with

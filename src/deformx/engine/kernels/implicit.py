@@ -34,7 +34,8 @@ from ..contact.pairplanes import (PP_COLS, PS_COLS, commit_pairs, pair_plane, pa
                                   refind_pairs, release_pulling_pairs, stiffen_pairs)
 from ..contact.speculative import (SP_K, freeze_friction_bounds, gather_planes, plane_forces,
                                    project_predictor, refind_segments, release_pulling,
-                                   start_penetrations, stiffen_deep)
+                                   start_penetrations, stiffen_deep,
+                                   unfreeze_friction_bounds)
 from .banded import (BLOCK_BAND, LU_UPPER, add_lower, block_cholesky, block_lu, block_lu_solve,
                      block_solve, expand_upper, store_block)
 from .lowrank import lowrank_apply, lowrank_factor
@@ -1056,6 +1057,17 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                     if m > 0:
                         added += stiffen_pairs(plist, m, pairs, rd, pos, rr, pp, ps)
                     stiffened += 1 if added > 0 else 0
+                    if added > 0 and frozen:
+                        # Friction bounds fixed at the normal forces before the stiffening
+                        # would hold no more (a 1 mm rope met by a capsule lying on the floor:
+                        # its bound 0.016 N, its normal force then 7 N; the capsule pushed it
+                        # along its normal only, the floor's friction held, and the wedge
+                        # locked it 75 % of its radius deep): they follow them again.
+                        for k in range(K):
+                            n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+                            unfreeze_friction_bounds(n0, nn, e0, ne, pos.shape[0], rd.sp_i,
+                                                     rd.sp_f)
+                        frozen = False
                 if added > 0:  # iterate on with the new planes or stiffnesses
                     # (islands as after a release: a pile's stiffened pair took 5-8 iterations
                     # to settle again, and with 4 halved one step in 100 on 5 of 14 seeds)
