@@ -34,7 +34,7 @@ from ..contact.pairplanes import (PP_COLS, PS_COLS, commit_pairs, pair_plane, pa
                                   refind_pairs, release_pulling_pairs, stiffen_pairs)
 from ..contact.speculative import (SP_K, freeze_friction_bounds, gather_planes, plane_forces,
                                    project_predictor, refind_segments, release_pulling,
-                                   start_penetrations, stiffen_deep,
+                                   reengage_deep, start_penetrations, stiffen_deep,
                                    unfreeze_friction_bounds)
 from .banded import (BLOCK_BAND, LU_UPPER, add_lower, block_cholesky, block_lu, block_lu_solve,
                      block_solve, expand_upper, store_block)
@@ -1035,14 +1035,19 @@ def _advance_island(isl, n_steps, t, sim, opts, rd, env, cols, pc, work):
                 # (an unconverged iterate about to be accepted is checked as well)
                 settled = converged or update <= ACCEPT
                 added = 0
-                if settled and (n_cols > 0 or m > 0) and refinds < MAX_REFIND:
+                if settled and (sources or m > 0) and refinds < MAX_REFIND:
                     # Segments that cut into a collider between their planes get one there,
-                    # and pairs that overlap away from theirs a new one.
+                    # pairs that overlap away from theirs a new one, and planes released deep
+                    # behind act again.
                     for k in range(K):
                         if near[k] != 0.0 and n_cols > 0:
                             n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
                             added += refind_segments(isl[k], n0, nn, e0, ne, pos, xn, planes,
                                                      rd, cols, rd.sp_i, rd.sp_f)
+                        if near[k] != 0.0 and sources:
+                            n0, e0, v0, ne, nn, nv, closed = _extent(rd, isl[k])
+                            added += reengage_deep(n0, nn, e0, ne, pos.shape[0], rd, rd.sp_i,
+                                                   rd.sp_f)
                     if m > 0:
                         added += refind_pairs(plist, m, pairs, rd, pos, xn, pp, ps)
                     refinds += 1 if added > 0 else 0
