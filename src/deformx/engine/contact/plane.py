@@ -31,6 +31,20 @@ def start_offset(carried, depth, speed, dt, v_out):
     return max(depth - 2.0 * speed * dt - v_out * dt, 0.0)
 
 
+# A point (or a pair of rods) found inside deeper than this fraction of its radius when its
+# contact begins was placed so: the world warns (``stats[r, 5]``; rod pairs ``stats[r, 9]``).
+START_DEEP = 0.2
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def note_start_inside(stats, r, carried, kept, depth, radius) -> None:
+    """Rod ``r``'s node or segment ``depth`` (m) inside a collider or plane, with the offset it
+    ``carried`` into this step and the one it ``kept`` (:func:`carry_offset`): a new offset
+    deeper than ``START_DEEP`` of its ``radius`` is noted for the world's warning."""
+    if carried < 0.0 and kept > 0.0 and depth > START_DEEP * radius:
+        stats[r, 5] = max(stats[r, 5], depth)
+
+
 @njit(cache=True, inline="always", error_model="numpy")
 def carry_offset(carried, depth, speed2, dt, v_out):
     """The offset (m) a node or segment at ``depth`` (<= 0: out of contact, then -1) keeps

@@ -23,7 +23,7 @@ from numba import njit
 
 from ..geometry.closest import closest_segment_segment
 from ..kernels.refcount import NO_REFCOUNT
-from .plane import V_OUT, start_offset
+from .plane import START_DEEP, V_OUT, start_offset
 from ..kernels.bundles import (
     E_EXCLUDED,
     E_PAIR_OFF,
@@ -151,11 +151,6 @@ def max_displacement(pos, ref, nodes) -> float:
              + (pos[i, 2] - ref[i, 2]) ** 2)
         worst = max(worst, d)
     return math.sqrt(worst)
-
-
-# A pair found overlapping deeper than this fraction of the thinner radius at its first step
-# of contact was placed so: the world warns (as for colliders: 20 % of the radius).
-START_DEEP = 0.2
 
 
 @njit(cache=True, inline="always", error_model="numpy")

@@ -35,7 +35,7 @@ from numba import njit
 from ..geometry.bvh import _box_gap2, closest_segment_search, nearest_k_search, signed_side
 from ..geometry.closest import bary_point, dist2, lerp, segment_triangle_dist2
 from ..kernels.refcount import NO_REFCOUNT
-from .plane import V_OUT, carry_offset, start_offset
+from .plane import V_OUT, carry_offset, note_start_inside, start_offset
 from .primitives import bounding_gap, segment_deepest, shape_sdf
 from ..kernels.bundles import (
     E_SEG_OFF,
@@ -729,7 +729,6 @@ def rod_collider_contacts(r, n0, nn, e0, ne, h, dt_ref, pos, vel, x_ref, rd, col
             anchor_col[slot] = -1
         if commit:  # the segment's offset for the next step (kernels/verlet.py, _carry_offsets)
             kept = carry_offset(seg_off[e], deepest, speed * speed, h, V_OUT)
-            if seg_off[e] < 0.0 and kept > 0.0 and deepest > 0.2 * radius:
-                rd.stats[r, 5] = max(rd.stats[r, 5], deepest)
+            note_start_inside(rd.stats, r, seg_off[e], kept, deepest, radius)
             seg_off[e] = kept
     return count

@@ -47,7 +47,7 @@ from numba import njit
 from ..kernels.bundles import (
     N_CONTACT_FORCE, N_FORCE, N_MASS, N_NODE_KMIN, N_NODE_RADIUS, R_COUPLED,
 )
-from .plane import PL_AUTO, PL_MUK, PL_MUS, V_OUT, plane_penalty
+from .plane import PL_AUTO, PL_MUK, PL_MUS, START_DEEP, V_OUT, plane_penalty
 from .primitives import tangent_bound
 from .segments import (
     MESH, P_AUTO, P_MUK, P_MUS, P_SHAPE, _add_reaction, _mesh_closest, _rotate, _shape_closest,
@@ -316,6 +316,15 @@ def _closest(cols, r, c, pose, slot, pa, pb, reach, lasting):
     return _shape_closest(c, cols.kind[c], pose, cols.par, pa, pb, reach)
 
 
+@njit(cache=True, inline="always", error_model="numpy")
+def _moves(twist, c):
+    """Whether collider ``c`` moves in this step (any linear or angular velocity)."""
+    for d in range(6):
+        if twist[c, d] != 0.0:
+            return True
+    return False
+
+
 @njit(cache=True, error_model="numpy")
 def _headed_plane(c, kind, pose, par, pa, pe, sd0, radius, reach, first_hit):
     """The tangent plane of shape ``c`` where a node of ``radius`` (m) flying from ``pa`` to
@@ -437,10 +446,9 @@ def gather_planes(r, n0, nn, e0, ne, h, X, V, gravity, planes, rd, cols, sp_i, s
                         touching and rel[0] * n[0] + rel[1] * n[1] + rel[2] * n[2]
                         < -PRESSED * rel_speed):
                     pe = (pa[0] + h * rel[0], pa[1] + h * rel[1], pa[2] + h * rel[2])
-                    sweeps = (twist[c, 0] != 0.0 or twist[c, 1] != 0.0 or twist[c, 2] != 0.0
-                              or twist[c, 3] != 0.0 or twist[c, 4] != 0.0 or twist[c, 5] != 0.0)
                     hit, s, sd, m, q = _headed_plane(c, cols.kind[c], pose, cols.par, pa, pe,
-                                                     sd, radius, reach, sweeps and not touching)
+                                                     sd, radius, reach,
+                                                     _moves(twist, c) and not touching)
                     if hit and m[0] * n[0] + m[1] * n[1] + m[2] * n[2] < 0.99:
                         gap = ((pa[0] - q[0]) * m[0] + (pa[1] - q[1]) * m[1]
                                + (pa[2] - q[2]) * m[2]) - radius
@@ -498,8 +506,7 @@ def refind_segments(r, n0, nn, e0, ne, X, Xs, planes, rd, cols, sp_i, sp_f) -> i
         for c in range(n_cols):
             if cols.allowed[r, c] == 0:
                 continue
-            if still and (twist[c, 0] == 0.0 and twist[c, 1] == 0.0 and twist[c, 2] == 0.0
-                          and twist[c, 3] == 0.0 and twist[c, 4] == 0.0 and twist[c, 5] == 0.0):
+            if still and not _moves(twist, c):
                 continue
             reach = (1.0 - REFIND_DEPTH) * radius
             if cols.kind[c] != MESH:
@@ -711,14 +718,14 @@ def plane_forces(r, n0, nn, e0, ne, h, dt_ref, X, Xs, V, planes, rd, cols, sp_i,
                 continue
             if commit and fn <= 0.0:
                 continue
-            if commit and d_off > 0.0 and d0 > 0.2 * radius and d0 > stats[5]:
+            if commit and d_off > 0.0 and d0 > START_DEEP * radius and d0 > stats[5]:
                 # A point inside a convex body lies behind all its tangent planes, no deeper
                 # than behind the shallowest: a node behind only the plane where it is headed
                 # (past the edge of a box's face) is not inside.
                 for jj in range(SP_K):
                     if sp_i[slot, jj, SP_SRC] == src:
                         d0 = min(d0, sp_f[slot, jj, SP_D0])
-                if d0 > 0.2 * radius:
+                if d0 > START_DEEP * radius:
                     stats[5] = max(stats[5], d0)
             f = (fn * n[0], fn * n[1], fn * n[2])
             ka = 0.0  # tangential stiffness along the friction force, and across it (N/m)

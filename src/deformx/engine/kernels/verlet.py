@@ -15,8 +15,8 @@ import math
 
 from numba import njit
 
-from ..contact.plane import (V_OUT, carry_offset, plane_contact_node, plane_penalty,
-                             start_offset)
+from ..contact.plane import (V_OUT, carry_offset, note_start_inside, plane_contact_node,
+                             plane_penalty, start_offset)
 from ..contact.segments import rod_collider_contacts
 from .bundles import (
     D_W, E_DIL, E_INV_J, E_J, E_OMEGA, E_Q, E_TEXT, E_TORQUE, N_CONTACT_FORCE, N_EXTRA, N_FEXT,
@@ -254,8 +254,7 @@ def _carry_offsets(r, n0, nn, planes, pos, vel, node_radius, pen_off, dt, cols, 
                 depth = max(depth, cols.pen[i, c])
         kept = carry_offset(pen_off[i], depth, vel[i, 0] ** 2 + vel[i, 1] ** 2 + vel[i, 2] ** 2,
                             dt, V_OUT)
-        if pen_off[i] < 0.0 and kept > 0.0 and depth > 0.2 * radius:
-            stats[r, 5] = max(stats[r, 5], depth)
+        note_start_inside(stats, r, pen_off[i], kept, depth, radius)
         pen_off[i] = kept
 
 
